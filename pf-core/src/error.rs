@@ -1,0 +1,74 @@
+//! The engine's error type: every variant says what went wrong and where.
+
+use thiserror::Error;
+
+/// Errors returned by pf-core. Variants carry the time step, index or parameter at fault.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum CoreError {
+    /// Every particle's weight underflowed to zero (or was −∞) at step `t`.
+    #[error("all particle weights are zero at step {t}: the likelihood underflowed for every particle")]
+    AllWeightsZero {
+        /// Time step at which the weights collapsed.
+        t: usize,
+    },
+    /// A log-weight was NaN or +∞ at step `t`, for particle `index`.
+    #[error("non-finite log-weight {value} at step {t}, particle {index}")]
+    NonFiniteWeight {
+        /// Time step.
+        t: usize,
+        /// Particle index.
+        index: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// A matrix that must be symmetric positive definite is not; `pivot` is the failing column.
+    #[error("{what} is not positive definite (Cholesky pivot {pivot} is {value})")]
+    NotPositiveDefinite {
+        /// Which matrix.
+        what: &'static str,
+        /// Column of the failing pivot.
+        pivot: usize,
+        /// The pivot value that was not positive.
+        value: f64,
+    },
+    /// Two dimensions that must agree do not.
+    #[error("dimension mismatch in {what}: expected {expected}, got {got}")]
+    DimensionMismatch {
+        /// What was being checked.
+        what: &'static str,
+        /// Expected size.
+        expected: usize,
+        /// Actual size.
+        got: usize,
+    },
+    /// A parameter is outside its valid range.
+    #[error("invalid parameter {name} = {value}: {reason}")]
+    InvalidParameter {
+        /// Parameter name, as the paper writes it where possible.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What the valid range is.
+        reason: &'static str,
+    },
+    /// Input data contain a NaN or infinite value.
+    #[error("non-finite value {value} in {what} at index {index}")]
+    NonFiniteData {
+        /// Which input.
+        what: &'static str,
+        /// Position of the bad value.
+        index: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// An operation needed at least one element.
+    #[error("{what} is empty")]
+    Empty {
+        /// What was empty.
+        what: &'static str,
+    },
+}
+
+/// Result alias for pf-core.
+pub type Result<T, E = CoreError> = std::result::Result<T, E>;

@@ -1,0 +1,40 @@
+//! # pf-core: the SMC engine
+//!
+//! Models, particle sets, resampling, the sequential importance sampling–resampling filter,
+//! genealogy, observers, Gaussian tools, the Kalman family, Monte Carlo replications and
+//! metrics. Every paper crate of the `pf` workspace stands on it. It never draws and never
+//! writes files: observers hand plain data to whoever called.
+//!
+//! | module | holds |
+//! |---|---|
+//! | [`model`] | [`StateSpaceModel`] and the optional capabilities |
+//! | [`models`] | ready-made models (the noisy AR(1)) |
+//! | [`weights`] | the one log-sum-exp, normalisation and ESS |
+//! | [`particles`] | weighted means and covariances of a particle set |
+//! | [`resample`] | multinomial, systematic, stratified and residual schemes |
+//! | [`filter`] | the SIR filter, bootstrap and guided mutations, resampling policy |
+//! | [`genealogy`] | ancestry: trajectories, surviving lineages, coalescence |
+//! | [`observe`] | the observer trait and recorders |
+//! | [`gaussian`] | multivariate normals and error ellipses |
+//! | [`kalman`] | linear-Gaussian model, Kalman filter, RTS smoother, UKF |
+//! | [`mc`] | reproducible parallel Monte Carlo replications |
+//! | [`metrics`] | RMSE, REC curves, residual summaries |
+
+pub mod error;
+pub mod filter;
+pub mod gaussian;
+pub mod genealogy;
+pub mod kalman;
+pub mod mc;
+pub mod metrics;
+pub mod model;
+pub mod models;
+pub mod observe;
+pub mod particles;
+pub mod resample;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
+pub mod weights;
+
+pub use error::{CoreError, Result};
+pub use model::{EuclideanState, Proposal, StateSpaceModel, TransitionDensity};

@@ -1,0 +1,184 @@
+//! Error metrics: RMSE as Karlsson et al. define it, REC curves, residual summaries.
+
+use crate::error::{CoreError, Result};
+use serde::{Deserialize, Serialize};
+
+/// `‖a − b‖²`.
+///
+/// # Errors
+/// Vectors of different lengths.
+pub fn squared_error(a: &[f64], b: &[f64]) -> Result<f64> {
+    if a.len() != b.len() {
+        return Err(CoreError::DimensionMismatch {
+            what: "estimate against truth",
+            expected: a.len(),
+            got: b.len(),
+        });
+    }
+    Ok(a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum())
+}
+
+fn check_rectangular(sq: &[Vec<f64>]) -> Result<usize> {
+    let t_f = sq.first().ok_or(CoreError::Empty { what: "replications" })?.len();
+    if t_f == 0 {
+        return Err(CoreError::Empty { what: "time steps" });
+    }
+    for row in sq {
+        if row.len() != t_f {
+            return Err(CoreError::DimensionMismatch {
+                what: "time steps of a replication",
+                expected: t_f,
+                got: row.len(),
+            });
+        }
+        if let Some(index) = row.iter().position(|v| !v.is_finite()) {
+            return Err(CoreError::NonFiniteData {
+                what: "squared errors",
+                index,
+                value: row[index],
+            });
+        }
+    }
+    Ok(t_f)
+}
+
+/// RMSE at each time step: `(1/N_MC Σ_j ‖x_i^true − x̂_i^(j)‖²)^{1/2}`, from squared errors
+/// `sq[j][i]` of replication `j` at step `i`.
+///
+/// # Errors
+/// No replications, ragged rows, or non-finite errors.
+pub fn rmse_per_step(sq: &[Vec<f64>]) -> Result<Vec<f64>> {
+    let t_f = check_rectangular(sq)?;
+    let n_mc = sq.len() as f64;
+    Ok((0..t_f)
+        .map(|i| (sq.iter().map(|row| row[i]).sum::<f64>() / n_mc).sqrt())
+        .collect())
+}
+
+/// Karlsson, Schön & Gustafsson's RMSE over a run:
+/// `(1/T_f Σ_i 1/N_MC Σ_j ‖x_i^true − x̂_i^(j)‖²)^{1/2}`.
+///
+/// # Errors
+/// As [`rmse_per_step`].
+pub fn rmse(sq: &[Vec<f64>]) -> Result<f64> {
+    let t_f = check_rectangular(sq)?;
+    let total: f64 = sq.iter().flatten().sum();
+    Ok((total / (t_f as f64 * sq.len() as f64)).sqrt())
+}
+
+/// A regression error characteristic curve (Bi & Bennett 2003): the fraction of errors
+/// within each tolerance, as El Abed et al. plot in their Fig. 4(c).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RecCurve {
+    /// Tolerances, increasing.
+    pub tolerance: Vec<f64>,
+    /// Fraction of `|error| ≤ tolerance`, in `[0, 1]`.
+    pub accuracy: Vec<f64>,
+}
+
+/// The REC curve of `errors` (absolute values are taken) over `tolerances` (sorted here).
+///
+/// # Errors
+/// No errors, or a non-finite error or tolerance.
+pub fn rec_curve(errors: &[f64], tolerances: &[f64]) -> Result<RecCurve> {
+    if errors.is_empty() {
+        return Err(CoreError::Empty { what: "errors" });
+    }
+    let mut abs: Vec<f64> = Vec::with_capacity(errors.len());
+    for (index, &e) in errors.iter().enumerate() {
+        if !e.is_finite() {
+            return Err(CoreError::NonFiniteData { what: "errors", index, value: e });
+        }
+        abs.push(e.abs());
+    }
+    if let Some(index) = tolerances.iter().position(|t| !t.is_finite()) {
+        return Err(CoreError::NonFiniteData {
+            what: "tolerances",
+            index,
+            value: tolerances[index],
+        });
+    }
+    abs.sort_by(f64::total_cmp);
+    let mut tolerance = tolerances.to_vec();
+    tolerance.sort_by(f64::total_cmp);
+    let n = abs.len() as f64;
+    let accuracy = tolerance
+        .iter()
+        .map(|&tol| abs.partition_point(|&e| e <= tol) as f64 / n)
+        .collect();
+    Ok(RecCurve { tolerance, accuracy })
+}
+
+/// `m` evenly spaced tolerances from 0 to `max`.
+pub fn tolerance_grid(max: f64, m: usize) -> Vec<f64> {
+    let m = m.max(2);
+    (0..m).map(|i| max * i as f64 / (m - 1) as f64).collect()
+}
+
+/// Mean, standard deviation and largest magnitude of residuals.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ResidualSummary {
+    /// Sample mean.
+    pub mean: f64,
+    /// Sample standard deviation (divisor `n − 1`; 0 for one residual).
+    pub std: f64,
+    /// `max |r_i|`.
+    pub max_abs: f64,
+}
+
+impl ResidualSummary {
+    /// Summarise residuals.
+    ///
+    /// # Errors
+    /// No residuals, or a non-finite one.
+    pub fn new(r: &[f64]) -> Result<Self> {
+        if r.is_empty() {
+            return Err(CoreError::Empty { what: "residuals" });
+        }
+        if let Some(index) = r.iter().position(|v| !v.is_finite()) {
+            return Err(CoreError::NonFiniteData { what: "residuals", index, value: r[index] });
+        }
+        let n = r.len() as f64;
+        let mean = r.iter().sum::<f64>() / n;
+        let var = if r.len() > 1 {
+            r.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
+        } else {
+            0.0
+        };
+        let max_abs = r.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        Ok(ResidualSummary { mean, std: var.sqrt(), max_abs })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rmse_matches_the_definition() {
+        // Two replications, two steps: squared errors 1, 4 / 9, 16.
+        let sq = vec![vec![1.0, 4.0], vec![9.0, 16.0]];
+        assert_eq!(rmse_per_step(&sq).unwrap(), vec![5f64.sqrt(), 10f64.sqrt()]);
+        assert!((rmse(&sq).unwrap() - 7.5f64.sqrt()).abs() < 1e-15);
+        assert!(rmse(&[vec![1.0], vec![]]).is_err());
+        assert!(rmse(&[]).is_err());
+        assert_eq!(squared_error(&[1.0, 2.0], &[0.0, 0.0]).unwrap(), 5.0);
+    }
+
+    #[test]
+    fn rec_counts_errors_within_tolerance() {
+        let c = rec_curve(&[0.5, -1.0, 2.0, 3.0], &[0.0, 1.0, 2.5, 10.0]).unwrap();
+        assert_eq!(c.accuracy, vec![0.0, 0.5, 0.75, 1.0]);
+        assert!(rec_curve(&[f64::NAN], &[1.0]).is_err());
+        assert_eq!(tolerance_grid(2.0, 3), vec![0.0, 1.0, 2.0]);
+    }
+
+    #[test]
+    fn residual_summary() {
+        let s = ResidualSummary::new(&[1.0, -3.0, 2.0]).unwrap();
+        assert_eq!(s.mean, 0.0);
+        assert_eq!(s.max_abs, 3.0);
+        assert!((s.std - 7f64.sqrt()).abs() < 1e-15);
+        assert!(ResidualSummary::new(&[]).is_err());
+    }
+}

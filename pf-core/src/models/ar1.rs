@@ -1,0 +1,167 @@
+//! The noisy AR(1) model of Cappé & Moulines, Section 5.
+
+use crate::error::{CoreError, Result};
+use crate::model::{StateSpaceModel, TransitionDensity};
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+const LN_2PI: f64 = 1.837_877_066_409_345_3;
+
+/// `X_{k+1} = φ X_k + σ U_k`, `Y_k = X_k + ρ V_k`, with `U_k, V_k ~ N(0, 1)` and
+/// `X_0 ~ N(m_0, s_0²)`.
+///
+/// The default initial law is the stationary one, `N(0, σ²/(1 − φ²))` when `|φ| < 1`.
+/// Cappé & Moulines' diffuse prior (`φ_0 = N(Y_0, ρ²)`) is [`NoisyAr1::diffuse`]; filter
+/// with `y_0` missing then, since `Y_0` is already in the prior.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NoisyAr1 {
+    /// φ, the autoregression coefficient.
+    pub phi: f64,
+    /// σ, the state noise standard deviation.
+    pub sigma: f64,
+    /// ρ, the observation noise standard deviation.
+    pub rho: f64,
+    /// m_0, the initial mean.
+    pub m0: f64,
+    /// s_0, the initial standard deviation.
+    pub s0: f64,
+}
+
+fn positive(name: &'static str, value: f64) -> Result<f64> {
+    if value > 0.0 && value.is_finite() {
+        Ok(value)
+    } else {
+        Err(CoreError::InvalidParameter {
+            name,
+            value,
+            reason: "must be positive and finite",
+        })
+    }
+}
+
+impl NoisyAr1 {
+    /// The model with its stationary initial law (needs `|φ| < 1`).
+    ///
+    /// # Errors
+    /// σ or ρ not positive, or φ not in (−1, 1).
+    pub fn new(phi: f64, sigma: f64, rho: f64) -> Result<Self> {
+        if !(phi.abs() < 1.0) {
+            return Err(CoreError::InvalidParameter {
+                name: "phi",
+                value: phi,
+                reason: "must lie in (-1, 1) for the stationary initial law; use with_initial",
+            });
+        }
+        positive("sigma", sigma)?;
+        positive("rho", rho)?;
+        Ok(NoisyAr1 {
+            phi,
+            sigma,
+            rho,
+            m0: 0.0,
+            s0: sigma / (1.0 - phi * phi).sqrt(),
+        })
+    }
+
+    /// Replace the initial law by `N(m0, s0²)`.
+    ///
+    /// # Errors
+    /// `s0` not positive, or `m0` not finite.
+    pub fn with_initial(mut self, m0: f64, s0: f64) -> Result<Self> {
+        if !m0.is_finite() {
+            return Err(CoreError::InvalidParameter {
+                name: "m0",
+                value: m0,
+                reason: "must be finite",
+            });
+        }
+        self.m0 = m0;
+        self.s0 = positive("s0", s0)?;
+        Ok(self)
+    }
+
+    /// Cappé & Moulines' diffuse prior: `X_0 ~ N(y_0, ρ²)`.
+    ///
+    /// # Errors
+    /// As [`with_initial`](Self::with_initial).
+    pub fn diffuse(self, y0: f64) -> Result<Self> {
+        let rho = self.rho;
+        self.with_initial(y0, rho)
+    }
+
+    /// Simulate `x_0…x_n` and `y_0…y_n` (n + 1 of each).
+    pub fn simulate<R: Rng + ?Sized>(&self, n: usize, rng: &mut R) -> (Vec<f64>, Vec<f64>) {
+        let mut xs = Vec::with_capacity(n + 1);
+        let mut ys = Vec::with_capacity(n + 1);
+        let mut x = self.sample_initial(rng);
+        for k in 0..=n {
+            if k > 0 {
+                x = self.sample_transition(k, &x, None, rng);
+            }
+            let v: f64 = StandardNormal.sample(rng);
+            xs.push(x);
+            ys.push(x + self.rho * v);
+        }
+        (xs, ys)
+    }
+}
+
+impl StateSpaceModel for NoisyAr1 {
+    type State = f64;
+    type Obs = f64;
+    type Input = ();
+
+    fn sample_initial<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        let z: f64 = StandardNormal.sample(rng);
+        self.m0 + self.s0 * z
+    }
+
+    #[inline]
+    fn sample_transition<R: Rng + ?Sized>(
+        &self,
+        _t: usize,
+        x_prev: &f64,
+        _u: Option<&()>,
+        rng: &mut R,
+    ) -> f64 {
+        let z: f64 = StandardNormal.sample(rng);
+        self.phi * x_prev + self.sigma * z
+    }
+
+    #[inline]
+    fn log_likelihood(&self, _t: usize, x: &f64, y: &f64) -> f64 {
+        let e = (y - x) / self.rho;
+        -0.5 * (e * e + LN_2PI) - self.rho.ln()
+    }
+}
+
+impl TransitionDensity for NoisyAr1 {
+    fn log_transition_density(&self, _t: usize, x_prev: &f64, x: &f64, _u: Option<&()>) -> f64 {
+        let e = (x - self.phi * x_prev) / self.sigma;
+        -0.5 * (e * e + LN_2PI) - self.sigma.ln()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_bad_parameters() {
+        assert!(NoisyAr1::new(0.98, 0.0, 1.0).is_err());
+        assert!(NoisyAr1::new(0.98, 0.2, -1.0).is_err());
+        assert!(NoisyAr1::new(1.0, 0.2, 1.0).is_err());
+        assert!(NoisyAr1::new(0.5, 0.2, 1.0).unwrap().with_initial(0.0, 0.0).is_err());
+    }
+
+    #[test]
+    fn densities_are_normal() {
+        let m = NoisyAr1::new(0.5, 2.0, 3.0).unwrap();
+        // N(y; x, ρ²) at y = x: −½ log(2π) − log ρ.
+        assert!((m.log_likelihood(0, &1.0, &1.0) - (-0.5 * LN_2PI - 3f64.ln())).abs() < 1e-14);
+        let lf = m.log_transition_density(1, &2.0, &3.0, None);
+        let e: f64 = (3.0 - 1.0) / 2.0;
+        assert!((lf - (-0.5 * (e * e + LN_2PI) - 2f64.ln())).abs() < 1e-14);
+    }
+}

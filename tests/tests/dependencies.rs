@@ -1,0 +1,95 @@
+//! The library crates must never pull rerun, plotters or clap: users who depend on one paper
+//! crate get the algorithm and the engine, not the drawing stack. Checked from
+//! `cargo metadata`'s resolved graph, following normal (non-dev, non-build) edges only.
+
+use serde_json::Value;
+use std::collections::{BTreeSet, HashMap};
+use std::process::Command;
+
+const FORBIDDEN: [&str; 3] = ["rerun", "plotters", "clap"];
+
+fn metadata() -> Value {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let out = Command::new(cargo)
+        .args(["metadata", "--format-version", "1", "--offline"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("cargo metadata runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).expect("cargo metadata prints JSON")
+}
+
+/// Names of every package reachable from `root` through normal dependency edges.
+fn normal_closure(meta: &Value, root: &str) -> BTreeSet<String> {
+    let names: HashMap<&str, &str> = meta["packages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| (p["id"].as_str().unwrap(), p["name"].as_str().unwrap()))
+        .collect();
+    let nodes: HashMap<&str, &Value> = meta["resolve"]["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| (n["id"].as_str().unwrap(), n))
+        .collect();
+    let start = names
+        .iter()
+        .find(|(_, n)| **n == root)
+        .map(|(id, _)| *id)
+        .unwrap_or_else(|| panic!("{root} is not in the workspace"));
+    let mut seen = BTreeSet::new();
+    let mut stack = vec![start];
+    while let Some(id) = stack.pop() {
+        if !seen.insert(id) {
+            continue;
+        }
+        for dep in nodes[id]["deps"].as_array().unwrap() {
+            let normal = dep["dep_kinds"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|k| k["kind"].is_null());
+            if normal {
+                stack.push(dep["pkg"].as_str().unwrap());
+            }
+        }
+    }
+    seen.into_iter().map(|id| names[id].to_string()).collect()
+}
+
+#[test]
+fn library_crates_never_depend_on_the_drawing_stack() {
+    let meta = metadata();
+    let members: Vec<String> = meta["workspace_members"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|id| {
+            let id = id.as_str().unwrap();
+            meta["packages"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|p| p["id"] == id)
+                .unwrap()["name"]
+                .as_str()
+                .unwrap()
+                .to_string()
+        })
+        .collect();
+    let libraries: Vec<&String> = members
+        .iter()
+        .filter(|m| m.as_str() != "pf-viz" && m.as_str() != "pf-tests")
+        .collect();
+    assert!(libraries.iter().any(|m| *m == "pf-core"));
+    for lib in libraries {
+        let closure = normal_closure(&meta, lib);
+        for bad in FORBIDDEN {
+            assert!(!closure.contains(bad), "{lib} pulls {bad} into its dependency tree");
+        }
+    }
+    // The check must be able to fail: pf-viz does pull them.
+    let viz = normal_closure(&meta, "pf-viz");
+    assert!(viz.contains("plotters") && viz.contains("clap"));
+}
