@@ -1,0 +1,31 @@
+//! Bootstrap filter on the noisy AR(1) model (φ = 0.98, σ = 0.2, ρ = 1), 500 steps,
+//! systematic resampling every step. Throughput is in particle-steps, so criterion's
+//! "elem/s" inverts to nanoseconds per particle-step.
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use pf_core::filter::{FilterConfig, ParticleFilter};
+use pf_core::mc::stream_rng;
+use pf_core::models::NoisyAr1;
+use std::hint::black_box;
+
+const STEPS: usize = 500;
+
+fn bootstrap(c: &mut Criterion) {
+    let model = NoisyAr1::new(0.98, 0.2, 1.0).expect("valid parameters");
+    let (_, ys) = model.simulate(STEPS - 1, &mut stream_rng(1, 0));
+    let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
+    let mut group = c.benchmark_group("bootstrap_ar1");
+    group.sample_size(10);
+    for n in [1_000usize, 10_000, 100_000, 1_000_000] {
+        group.throughput(Throughput::Elements((n * STEPS) as u64));
+        let mut pf = ParticleFilter::bootstrap(model, FilterConfig::new(n)).expect("valid config");
+        let mut rng = stream_rng(2, 0);
+        group.bench_with_input(BenchmarkId::new("systematic", format!("N={n}")), &n, |b, _| {
+            b.iter(|| black_box(pf.run(&ys, None, &mut rng, &mut ()).expect("filter runs").log_lik))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bootstrap);
+criterion_main!(benches);

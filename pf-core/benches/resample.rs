@@ -1,0 +1,30 @@
+//! Each resampling scheme at N = 10⁶, on skewed weights. Throughput in particles.
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use pf_core::mc::stream_rng;
+use pf_core::resample::{Resample, Resampler};
+use rand::RngExt;
+use std::hint::black_box;
+
+fn resample(c: &mut Criterion) {
+    let n = 1_000_000;
+    let mut rng = stream_rng(3, 0);
+    let raw: Vec<f64> = (0..n).map(|_| rng.random::<f64>().powi(4)).collect();
+    let total: f64 = raw.iter().sum();
+    let w: Vec<f64> = raw.iter().map(|x| x / total).collect();
+    let mut ancestors = vec![0usize; n];
+    let mut group = c.benchmark_group("resample");
+    group.throughput(Throughput::Elements(n as u64));
+    for scheme in Resampler::ALL {
+        group.bench_with_input(BenchmarkId::new(scheme.name(), format!("N={n}")), &scheme, |b, s| {
+            b.iter(|| {
+                s.resample(&w, &mut rng, &mut ancestors);
+                black_box(ancestors[n / 2])
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, resample);
+criterion_main!(benches);
