@@ -1,6 +1,7 @@
 //! Bootstrap filter on the noisy AR(1) model (φ = 0.98, σ = 0.2, ρ = 1), 500 steps,
 //! systematic resampling every step. Throughput is in particle-steps, so criterion's
 //! "elem/s" inverts to nanoseconds per particle-step.
+#![allow(missing_docs)] // criterion's macros generate undocumented items
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use pf_core::filter::{FilterConfig, ParticleFilter};
@@ -20,9 +21,19 @@ fn bootstrap(c: &mut Criterion) {
         group.throughput(Throughput::Elements((n * STEPS) as u64));
         let mut pf = ParticleFilter::bootstrap(model, FilterConfig::new(n)).expect("valid config");
         let mut rng = stream_rng(2, 0);
-        group.bench_with_input(BenchmarkId::new("systematic", format!("N={n}")), &n, |b, _| {
-            b.iter(|| black_box(pf.run(&ys, None, &mut rng, &mut ()).expect("filter runs").log_lik))
-        });
+        group.bench_with_input(
+            BenchmarkId::new("systematic", format!("N={n}")),
+            &n,
+            |b, _| {
+                b.iter(|| {
+                    black_box(
+                        pf.run(&ys, None, &mut rng, &mut ())
+                            .expect("filter runs")
+                            .log_lik,
+                    )
+                })
+            },
+        );
     }
     group.finish();
 }

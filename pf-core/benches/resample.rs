@@ -1,4 +1,5 @@
 //! Each resampling scheme at N = 10⁶, on skewed weights. Throughput in particles.
+#![allow(missing_docs)] // criterion's macros generate undocumented items
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use pf_core::mc::stream_rng;
@@ -16,12 +17,16 @@ fn resample(c: &mut Criterion) {
     let mut group = c.benchmark_group("resample");
     group.throughput(Throughput::Elements(n as u64));
     for scheme in Resampler::ALL {
-        group.bench_with_input(BenchmarkId::new(scheme.name(), format!("N={n}")), &scheme, |b, s| {
-            b.iter(|| {
-                s.resample(&w, &mut rng, &mut ancestors);
-                black_box(ancestors[n / 2])
-            })
-        });
+        group.bench_with_input(
+            BenchmarkId::new(scheme.name(), format!("N={n}")),
+            &scheme,
+            |b, s| {
+                b.iter(|| {
+                    s.resample(&w, &mut rng, &mut ancestors);
+                    black_box(ancestors[n / 2])
+                })
+            },
+        );
     }
     group.finish();
 }

@@ -7,7 +7,9 @@ use thiserror::Error;
 #[non_exhaustive]
 pub enum CoreError {
     /// Every particle's weight underflowed to zero (or was −∞) at step `t`.
-    #[error("all particle weights are zero at step {t}: the likelihood underflowed for every particle")]
+    #[error(
+        "all particle weights are zero at step {t}: the likelihood underflowed for every particle"
+    )]
     AllWeightsZero {
         /// Time step at which the weights collapsed.
         t: usize,
@@ -62,12 +64,30 @@ pub enum CoreError {
         /// The offending value.
         value: f64,
     },
+    /// An error that happened while processing time step `t` of a sequence.
+    #[error("at step {t}: {source}")]
+    AtStep {
+        /// Time step.
+        t: usize,
+        /// What went wrong there.
+        source: Box<CoreError>,
+    },
     /// An operation needed at least one element.
     #[error("{what} is empty")]
     Empty {
         /// What was empty.
         what: &'static str,
     },
+}
+
+impl CoreError {
+    /// Attach the time step at which this error happened.
+    pub fn at_step(self, t: usize) -> Self {
+        CoreError::AtStep {
+            t,
+            source: Box::new(self),
+        }
+    }
 }
 
 /// Result alias for pf-core.

@@ -259,7 +259,10 @@ impl ErrorEllipse {
                 let t = std::f64::consts::TAU * i as f64 / n as f64;
                 let u = self.semi_axes[0] * t.cos();
                 let v = self.semi_axes[1] * t.sin();
-                [self.centre[0] + c * u - s * v, self.centre[1] + s * u + c * v]
+                [
+                    self.centre[0] + c * u - s * v,
+                    self.centre[1] + s * u + c * v,
+                ]
             })
             .collect()
     }
@@ -386,11 +389,7 @@ mod tests {
     #[test]
     fn log_density_matches_closed_form_2d() {
         let (s1, s2, rho) = (1.5_f64, 0.7_f64, -0.4_f64);
-        let cov = DMatrix::from_row_slice(
-            2,
-            2,
-            &[s1 * s1, rho * s1 * s2, rho * s1 * s2, s2 * s2],
-        );
+        let cov = DMatrix::from_row_slice(2, 2, &[s1 * s1, rho * s1 * s2, rho * s1 * s2, s2 * s2]);
         let mu = DVector::from_vec(vec![0.3, -1.0]);
         let g = MvNormal::new(mu.clone(), &cov).unwrap();
         let x = DVector::from_vec(vec![1.1, -0.2]);
@@ -442,7 +441,7 @@ mod tests {
     #[test]
     fn ellipse_of_diagonal_covariance_is_axis_aligned() {
         let mass = 0.95;
-        let k2 = -2.0 * (1.0 - mass as f64).ln();
+        let k2 = -2.0 * (1.0_f64 - mass).ln();
         let e = error_ellipse([1.0, 2.0], [[4.0, 0.0], [0.0, 1.0]], mass).unwrap();
         // Closed-form on exact inputs: a few ε.
         let tol = 8.0 * f64::EPSILON * 4.0 * k2;
@@ -472,7 +471,10 @@ mod tests {
             ];
             let e = error_ellipse([0.0, 0.0], cov, 0.5).unwrap();
             // Eigenvector perturbation ~ ε·‖Σ‖/(λ₁ − λ₂) ≈ 1.1 ε; allow 64 ε.
-            assert!((e.angle - expect).abs() < 64.0 * f64::EPSILON, "θ = {theta}");
+            assert!(
+                (e.angle - expect).abs() < 64.0 * f64::EPSILON,
+                "θ = {theta}"
+            );
             let k2 = -2.0 * 0.5_f64.ln();
             assert!((e.semi_axes[0] - (k2 * l1).sqrt()).abs() < 64.0 * f64::EPSILON);
             assert!((e.semi_axes[1] - (k2 * l2).sqrt()).abs() < 64.0 * f64::EPSILON);

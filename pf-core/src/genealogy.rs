@@ -126,11 +126,14 @@ impl Genealogy {
             .iter()
             .enumerate()
             .map(|(j, &idx)| {
-                positions[j].get(idx).cloned().ok_or(CoreError::DimensionMismatch {
-                    what: "particles recorded at a step",
-                    expected: self.n_particles,
-                    got: positions[j].len(),
-                })
+                positions[j]
+                    .get(idx)
+                    .cloned()
+                    .ok_or(CoreError::DimensionMismatch {
+                        what: "particles recorded at a step",
+                        expected: self.n_particles,
+                        got: positions[j].len(),
+                    })
             })
             .collect()
     }
@@ -201,7 +204,12 @@ mod tests {
         assert_eq!(g.lineage(2).unwrap(), vec![0, 1, 1, 2]);
         // Particle 0 at step 3 ← 0 at step 2 ← 1 at step 1 ← 0 at step 0.
         assert_eq!(g.lineage(0).unwrap(), vec![0, 1, 0, 0]);
-        let pos = vec![vec![10, 11, 12], vec![20, 21, 22], vec![30, 31, 32], vec![40, 41, 42]];
+        let pos = vec![
+            vec![10, 11, 12],
+            vec![20, 21, 22],
+            vec![30, 31, 32],
+            vec![40, 41, 42],
+        ];
         assert_eq!(g.trajectory(3, 2, &pos).unwrap(), vec![10, 21, 31, 42]);
         assert!(g.lineage(3).is_err());
     }

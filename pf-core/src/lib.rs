@@ -14,6 +14,7 @@
 //! | [`resample`] | multinomial, systematic, stratified and residual schemes |
 //! | [`filter`] | the SIR filter, bootstrap and guided mutations, resampling policy |
 //! | [`genealogy`] | ancestry: trajectories, surviving lineages, coalescence |
+//! | [`geometry`] | angle wrapping for bearings |
 //! | [`observe`] | the observer trait and recorders |
 //! | [`gaussian`] | multivariate normals and error ellipses |
 //! | [`kalman`] | linear-Gaussian model, Kalman filter, RTS smoother, UKF |
@@ -24,6 +25,7 @@ pub mod error;
 pub mod filter;
 pub mod gaussian;
 pub mod genealogy;
+pub mod geometry;
 pub mod kalman;
 pub mod mc;
 pub mod metrics;

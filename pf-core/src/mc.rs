@@ -100,7 +100,12 @@ mod tests {
     #[test]
     fn results_do_not_depend_on_thread_count() {
         let work = |_r: usize, rng: &mut PfRng| (0..1000).map(|_| rng.random::<f64>()).sum::<f64>();
-        let pool = |t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
+        let pool = |t| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .unwrap()
+        };
         let one = pool(1).install(|| replicate(42, 64, Par::Rayon, work));
         let two = pool(2).install(|| replicate(42, 64, Par::Rayon, work));
         let seq = replicate(42, 64, Par::Seq, work);
@@ -111,7 +116,12 @@ mod tests {
     #[test]
     fn first_error_in_order_wins() {
         let r: Result<Vec<usize>, usize> =
-            try_replicate(0, 10, Par::Rayon, |r, _| if r >= 3 { Err(r) } else { Ok(r) });
+            try_replicate(
+                0,
+                10,
+                Par::Rayon,
+                |r, _| if r >= 3 { Err(r) } else { Ok(r) },
+            );
         assert_eq!(r, Err(3));
     }
 }

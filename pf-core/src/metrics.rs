@@ -19,7 +19,12 @@ pub fn squared_error(a: &[f64], b: &[f64]) -> Result<f64> {
 }
 
 fn check_rectangular(sq: &[Vec<f64>]) -> Result<usize> {
-    let t_f = sq.first().ok_or(CoreError::Empty { what: "replications" })?.len();
+    let t_f = sq
+        .first()
+        .ok_or(CoreError::Empty {
+            what: "replications",
+        })?
+        .len();
     if t_f == 0 {
         return Err(CoreError::Empty { what: "time steps" });
     }
@@ -87,7 +92,11 @@ pub fn rec_curve(errors: &[f64], tolerances: &[f64]) -> Result<RecCurve> {
     let mut abs: Vec<f64> = Vec::with_capacity(errors.len());
     for (index, &e) in errors.iter().enumerate() {
         if !e.is_finite() {
-            return Err(CoreError::NonFiniteData { what: "errors", index, value: e });
+            return Err(CoreError::NonFiniteData {
+                what: "errors",
+                index,
+                value: e,
+            });
         }
         abs.push(e.abs());
     }
@@ -106,7 +115,10 @@ pub fn rec_curve(errors: &[f64], tolerances: &[f64]) -> Result<RecCurve> {
         .iter()
         .map(|&tol| abs.partition_point(|&e| e <= tol) as f64 / n)
         .collect();
-    Ok(RecCurve { tolerance, accuracy })
+    Ok(RecCurve {
+        tolerance,
+        accuracy,
+    })
 }
 
 /// `m` evenly spaced tolerances from 0 to `max`.
@@ -136,7 +148,11 @@ impl ResidualSummary {
             return Err(CoreError::Empty { what: "residuals" });
         }
         if let Some(index) = r.iter().position(|v| !v.is_finite()) {
-            return Err(CoreError::NonFiniteData { what: "residuals", index, value: r[index] });
+            return Err(CoreError::NonFiniteData {
+                what: "residuals",
+                index,
+                value: r[index],
+            });
         }
         let n = r.len() as f64;
         let mean = r.iter().sum::<f64>() / n;
@@ -146,7 +162,11 @@ impl ResidualSummary {
             0.0
         };
         let max_abs = r.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        Ok(ResidualSummary { mean, std: var.sqrt(), max_abs })
+        Ok(ResidualSummary {
+            mean,
+            std: var.sqrt(),
+            max_abs,
+        })
     }
 }
 

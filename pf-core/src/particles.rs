@@ -5,7 +5,9 @@ use crate::model::EuclideanState;
 use nalgebra::{DMatrix, DVector};
 
 fn dim_of<S: EuclideanState>(x: &[S], w: &[f64]) -> Result<usize> {
-    let first = x.first().ok_or(CoreError::Empty { what: "particle set" })?;
+    let first = x.first().ok_or(CoreError::Empty {
+        what: "particle set",
+    })?;
     if w.len() != x.len() {
         return Err(CoreError::DimensionMismatch {
             what: "weights against particles",
@@ -78,7 +80,10 @@ mod tests {
     #[test]
     fn errors_on_bad_shapes() {
         let x: Vec<f64> = vec![];
-        assert!(matches!(weighted_mean(&x, &[]), Err(CoreError::Empty { .. })));
+        assert!(matches!(
+            weighted_mean(&x, &[]),
+            Err(CoreError::Empty { .. })
+        ));
         assert!(matches!(
             weighted_mean(&[1.0, 2.0], &[1.0]),
             Err(CoreError::DimensionMismatch { .. })

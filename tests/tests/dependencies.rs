@@ -15,7 +15,11 @@ fn metadata() -> Value {
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .expect("cargo metadata runs");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     serde_json::from_slice(&out.stdout).expect("cargo metadata prints JSON")
 }
 
@@ -86,7 +90,10 @@ fn library_crates_never_depend_on_the_drawing_stack() {
     for lib in libraries {
         let closure = normal_closure(&meta, lib);
         for bad in FORBIDDEN {
-            assert!(!closure.contains(bad), "{lib} pulls {bad} into its dependency tree");
+            assert!(
+                !closure.contains(bad),
+                "{lib} pulls {bad} into its dependency tree"
+            );
         }
     }
     // The check must be able to fail: pf-viz does pull them.

@@ -62,7 +62,10 @@ fn likelihood_estimate_is_unbiased_and_filter_means_match_the_kalman_filter() {
         (s.log_lik, est.means)
     });
 
-    let ratio: Vec<f64> = runs.iter().map(|(l, _)| (l - exact.log_likelihood).exp()).collect();
+    let ratio: Vec<f64> = runs
+        .iter()
+        .map(|(l, _)| (l - exact.log_likelihood).exp())
+        .collect();
     let z = bonferroni_z(1 + 2 * (n + 1));
     let (m, se) = mean_and_se(&ratio);
     assert!((m - 1.0).abs() < z * se, "E[Ẑ/Z] = {m} ± {se}");
@@ -89,10 +92,14 @@ fn likelihood_estimate_is_unbiased_and_filter_means_match_the_kalman_filter() {
 fn every_resampler_and_policy_gives_an_unbiased_likelihood() {
     let (phi, sigma, rho) = (0.9, 0.5, 1.0);
     let ar1 = NoisyAr1::new(phi, sigma, rho).unwrap();
-    let twin = LinearGaussian::scalar(phi, 1.0, sigma * sigma, rho * rho, ar1.m0, ar1.s0 * ar1.s0).unwrap();
+    let twin = LinearGaussian::scalar(phi, 1.0, sigma * sigma, rho * rho, ar1.m0, ar1.s0 * ar1.s0)
+        .unwrap();
     let (_, ys) = ar1.simulate(40, &mut stream_rng(7, 0));
     let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
-    let yv: Vec<Option<DVector<f64>>> = ys.iter().map(|y| y.map(|y| DVector::from_element(1, y))).collect();
+    let yv: Vec<Option<DVector<f64>>> = ys
+        .iter()
+        .map(|y| y.map(|y| DVector::from_element(1, y)))
+        .collect();
     let exact = kalman_filter(&twin, &yv, None).unwrap().log_likelihood;
 
     let policies = [
@@ -102,13 +109,20 @@ fn every_resampler_and_policy_gives_an_unbiased_likelihood() {
     let z = bonferroni_z(Resampler::ALL.len() * policies.len());
     for resampler in Resampler::ALL {
         for policy in policies {
-            let cfg = FilterConfig { n_particles: 200, resampler, policy };
+            let cfg = FilterConfig {
+                n_particles: 200,
+                resampler,
+                policy,
+            };
             let ratio = replicate(2, 400, Par::Rayon, |_, rng| {
                 let mut pf = ParticleFilter::bootstrap(ar1, cfg).unwrap();
                 (pf.run(&ys, None, rng, &mut ()).unwrap().log_lik - exact).exp()
             });
             let (m, se) = mean_and_se(&ratio);
-            assert!((m - 1.0).abs() < z * se, "{resampler} {policy:?}: E[Ẑ/Z] = {m} ± {se}");
+            assert!(
+                (m - 1.0).abs() < z * se,
+                "{resampler} {policy:?}: E[Ẑ/Z] = {m} ± {se}"
+            );
         }
     }
 }
@@ -126,6 +140,11 @@ fn monte_carlo_is_identical_for_any_thread_count() {
             (s.log_lik.to_bits(), pf.mean().unwrap()[0].to_bits())
         })
     };
-    let pool = |t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
+    let pool = |t| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .unwrap()
+    };
     assert_eq!(pool(1).install(work), pool(2).install(work));
 }

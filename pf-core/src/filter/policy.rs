@@ -40,14 +40,16 @@ impl ResamplePolicy {
     /// Reject thresholds that cannot mean anything.
     pub fn validate(&self) -> Result<()> {
         match *self {
-            ResamplePolicy::EssBelow(EssThreshold::Absolute(n_t)) if !(n_t >= 0.0) => {
+            ResamplePolicy::EssBelow(EssThreshold::Absolute(n_t)) if n_t.is_nan() || n_t < 0.0 => {
                 Err(CoreError::InvalidParameter {
                     name: "N_T",
                     value: n_t,
                     reason: "ESS threshold must be a non-negative number",
                 })
             }
-            ResamplePolicy::EssBelow(EssThreshold::Fraction(r)) if !(r > 0.0 && r <= 1.0) => {
+            ResamplePolicy::EssBelow(EssThreshold::Fraction(r))
+                if r.is_nan() || r <= 0.0 || r > 1.0 =>
+            {
                 Err(CoreError::InvalidParameter {
                     name: "ESS fraction",
                     value: r,

@@ -215,9 +215,7 @@ impl<M: StateSpaceModel, P: Mutation<M>, Rs: Resample> ParticleFilter<M, P, Rs> 
                 }
                 for i in 0..n {
                     let a = self.ancestors_next[i];
-                    let (x, lw) = self
-                        .mutation
-                        .mutate(&self.model, t, &self.x[a], u, y, rng);
+                    let (x, lw) = self.mutation.mutate(&self.model, t, &self.x[a], u, y, rng);
                     let prior = if resample { -log_n } else { self.log_w[i] };
                     self.log_w_next[i] = prior + lw;
                     self.x_next.push(x);
@@ -346,7 +344,13 @@ mod tests {
         fn sample_initial<R: Rng + ?Sized>(&self, _rng: &mut R) -> f64 {
             0.0
         }
-        fn sample_transition<R: Rng + ?Sized>(&self, _: usize, x: &f64, _: Option<&()>, _: &mut R) -> f64 {
+        fn sample_transition<R: Rng + ?Sized>(
+            &self,
+            _: usize,
+            x: &f64,
+            _: Option<&()>,
+            _: &mut R,
+        ) -> f64 {
             *x
         }
         fn log_likelihood(&self, _t: usize, x: &f64, y: &f64) -> f64 {
@@ -417,14 +421,19 @@ mod tests {
         };
         let mut pf = ParticleFilter::bootstrap(ar1(), cfg).unwrap();
         let mut rec = EssRecorder::new();
-        let s = pf.run(&data(100), None, &mut stream_rng(3, 0), &mut rec).unwrap();
+        let s = pf
+            .run(&data(100), None, &mut stream_rng(3, 0), &mut rec)
+            .unwrap();
         let mut count = 0;
         for k in 1..s.reports.len() {
             let should = s.reports[k - 1].ess < 250.0;
             assert_eq!(s.reports[k].resampled, should, "step {k}");
             count += usize::from(should);
         }
-        assert!(count > 0 && count < 100, "the test must exercise both branches");
+        assert!(
+            count > 0 && count < 100,
+            "the test must exercise both branches"
+        );
     }
 
     #[test]
@@ -432,7 +441,9 @@ mod tests {
         let run = || {
             let mut pf = ParticleFilter::bootstrap(ar1(), FilterConfig::new(64)).unwrap();
             let mut g = GenealogyRecorder::new();
-            let s = pf.run(&data(50), None, &mut stream_rng(9, 4), &mut g).unwrap();
+            let s = pf
+                .run(&data(50), None, &mut stream_rng(9, 4), &mut g)
+                .unwrap();
             (s, g.into_genealogy())
         };
         assert_eq!(run(), run());
@@ -452,7 +463,15 @@ mod tests {
         ) -> f64 {
             m.sample_transition(t, xp, u, rng)
         }
-        fn log_density(&self, m: &NoisyAr1, t: usize, xp: &f64, x: &f64, u: Option<&()>, _y: Option<&f64>) -> f64 {
+        fn log_density(
+            &self,
+            m: &NoisyAr1,
+            t: usize,
+            xp: &f64,
+            x: &f64,
+            u: Option<&()>,
+            _y: Option<&f64>,
+        ) -> f64 {
             m.log_transition_density(t, xp, x, u)
         }
     }
@@ -462,9 +481,12 @@ mod tests {
         let ys = data(40);
         let cfg = FilterConfig::new(100);
         let mut boot = ParticleFilter::bootstrap(ar1(), cfg).unwrap();
-        let mut guided = ParticleFilter::new(ar1(), Guided(PriorProposal), cfg.resampler, cfg).unwrap();
+        let mut guided =
+            ParticleFilter::new(ar1(), Guided(PriorProposal), cfg.resampler, cfg).unwrap();
         let a = boot.run(&ys, None, &mut stream_rng(5, 0), &mut ()).unwrap();
-        let b = guided.run(&ys, None, &mut stream_rng(5, 0), &mut ()).unwrap();
+        let b = guided
+            .run(&ys, None, &mut stream_rng(5, 0), &mut ())
+            .unwrap();
         // Same draws; log f − log q cancels up to rounding of two equal numbers.
         assert!((a.log_lik - b.log_lik).abs() < 1e-9 * a.log_lik.abs());
         assert_eq!(boot.particles(), guided.particles());
@@ -480,7 +502,10 @@ mod tests {
         assert!(ParticleFilter::bootstrap(ar1(), cfg).is_err());
         let mut pf = ParticleFilter::bootstrap(ar1(), FilterConfig::new(10)).unwrap();
         let mut rng = stream_rng(0, 0);
-        assert!(matches!(pf.run(&[], None, &mut rng, &mut ()), Err(CoreError::Empty { .. })));
+        assert!(matches!(
+            pf.run(&[], None, &mut rng, &mut ()),
+            Err(CoreError::Empty { .. })
+        ));
         let us = [(), ()];
         assert!(matches!(
             pf.run(&data(5), Some(&us), &mut rng, &mut ()),

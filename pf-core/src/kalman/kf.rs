@@ -17,7 +17,7 @@ use crate::error::{CoreError, Result};
 use crate::gaussian::{cholesky_into, log_normal_chol_in_place, symmetrise};
 
 /// Scratch buffers of the step API, sized on first use and reused afterwards.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default)]
 struct Workspace {
     /// d-vectors.
     vd: DVector<f64>,
@@ -57,14 +57,21 @@ impl Workspace {
 
 /// A Gaussian belief `N(m, P)` about the state, with the buffers its steps reuse.
 ///
-/// The same type carries the [`Ukf`](super::Ukf)'s belief.
-#[derive(Debug, Clone, PartialEq)]
+/// The same type carries the [`Ukf`](super::Ukf)'s belief. Equality compares `m` and `P`
+/// only, not the scratch buffers.
+#[derive(Debug, Clone)]
 pub struct KalmanState {
     /// Mean m.
     pub m: DVector<f64>,
     /// Covariance P.
     pub p: DMatrix<f64>,
     ws: Workspace,
+}
+
+impl PartialEq for KalmanState {
+    fn eq(&self, other: &Self) -> bool {
+        self.m == other.m && self.p == other.p
+    }
 }
 
 impl KalmanState {
@@ -227,12 +234,13 @@ pub fn kalman_filter(
     let mut st = KalmanState::prior(model);
     for (t, y) in ys.iter().enumerate() {
         if t > 0 {
-            st.predict(model, us.map(|us| &us[t]))?;
+            st.predict(model, us.map(|us| &us[t]))
+                .map_err(|e| e.at_step(t))?;
         }
         out.predicted_means.push(st.m.clone());
         out.predicted_covs.push(st.p.clone());
         let ll = match y {
-            Some(y) => st.update(model, y)?,
+            Some(y) => st.update(model, y).map_err(|e| e.at_step(t))?,
             None => 0.0,
         };
         out.log_lik_increments.push(ll);
@@ -332,7 +340,10 @@ pub(crate) mod tests {
         )
         .unwrap();
         let ys = vec![None, None];
-        let us = vec![DVector::from_element(1, 99.0), DVector::from_element(1, 3.0)];
+        let us = vec![
+            DVector::from_element(1, 99.0),
+            DVector::from_element(1, 3.0),
+        ];
         let kf = kalman_filter(&model, &ys, Some(&us)).unwrap();
         // m_{1|0} = 0.5·1 + 2·3 (us[0] unused), P_{1|0} = 0.25·0.3 + 0.1: exact in binary
         // up to one rounding each.

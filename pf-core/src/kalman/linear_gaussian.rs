@@ -16,7 +16,10 @@ use crate::error::{CoreError, Result};
 use crate::gaussian::{MvNormal, cholesky};
 use crate::model::{StateSpaceModel, TransitionDensity};
 
-/// A linear-Gaussian model `(A, B, C, Q, R, m₀, P₀)`; see the [module docs](self).
+/// A simulated path: states `X_0..X_n` and observations `Y_0..Y_n` (n + 1 of each).
+pub type Simulated = (Vec<DVector<f64>>, Vec<DVector<f64>>);
+
+/// A linear-Gaussian model `(A, B, C, Q, R, m₀, P₀)`; see the [module docs](crate::kalman).
 ///
 /// The matrices are read through accessors named as in the maths (`a()` is A, …). They are
 /// not public fields because the Cholesky factors of Q, R and P₀ are computed once, in
@@ -186,7 +189,15 @@ impl LinearGaussian {
     /// `X_{k+1} = φX_k + σU_k`, `Y_k = X_k + ρV_k` is `scalar(φ, 1, σ², ρ², m0, p0)`.
     pub fn scalar(a: f64, c: f64, q: f64, r: f64, m0: f64, p0: f64) -> Result<Self> {
         let s = |v: f64| DMatrix::from_element(1, 1, v);
-        Self::new(s(a), None, s(c), s(q), s(r), DVector::from_element(1, m0), s(p0))
+        Self::new(
+            s(a),
+            None,
+            s(c),
+            s(q),
+            s(r),
+            DVector::from_element(1, m0),
+            s(p0),
+        )
     }
 
     /// State dimension d.
@@ -343,7 +354,7 @@ impl LinearGaussian {
         n: usize,
         us: Option<&[DVector<f64>]>,
         rng: &mut R,
-    ) -> Result<(Vec<DVector<f64>>, Vec<DVector<f64>>)> {
+    ) -> Result<Simulated> {
         if let Some(us) = us {
             self.check_inputs(us, n + 1)?;
         }
@@ -440,14 +451,17 @@ mod tests {
         DMatrix::from_row_slice(r, c, v)
     }
 
-    fn two_d() -> (
+    /// (A, C, Q, R, m₀, P₀) of a valid 2-D model.
+    type Parts = (
         DMatrix<f64>,
         DMatrix<f64>,
         DMatrix<f64>,
         DMatrix<f64>,
         DVector<f64>,
         DMatrix<f64>,
-    ) {
+    );
+
+    fn two_d() -> Parts {
         (
             mat(2, 2, &[1.0, 0.1, 0.0, 0.9]),
             mat(1, 2, &[1.0, 0.5]),
@@ -516,7 +530,10 @@ mod tests {
             DVector::zeros(3),
             p0.clone(),
         );
-        assert!(matches!(e, Err(CoreError::DimensionMismatch { got: 3, .. })));
+        assert!(matches!(
+            e,
+            Err(CoreError::DimensionMismatch { got: 3, .. })
+        ));
         // Q with a negative second pivot: 0.1 − 0.5²/1 = −0.15.
         let bad_q = mat(2, 2, &[1.0, 0.5, 0.5, 0.1]);
         let e = LinearGaussian::new(
@@ -544,7 +561,10 @@ mod tests {
             m0.clone(),
             p0.clone(),
         );
-        assert!(matches!(e, Err(CoreError::InvalidParameter { name: "Q", .. })));
+        assert!(matches!(
+            e,
+            Err(CoreError::InvalidParameter { name: "Q", .. })
+        ));
         let e = LinearGaussian::new(a, None, c, q, mat(1, 1, &[0.0]), m0, p0);
         assert!(matches!(
             e,

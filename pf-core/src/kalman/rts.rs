@@ -42,7 +42,10 @@ pub fn rts_smoother(model: &LinearGaussian, kf: &KalmanOutput) -> Result<Smoothe
     for (what, len) in [
         ("Kalman output filtered covariances", kf.filtered_covs.len()),
         ("Kalman output predicted means", kf.predicted_means.len()),
-        ("Kalman output predicted covariances", kf.predicted_covs.len()),
+        (
+            "Kalman output predicted covariances",
+            kf.predicted_covs.len(),
+        ),
     ] {
         if len != n1 {
             return Err(CoreError::DimensionMismatch {
@@ -84,7 +87,11 @@ pub fn rts_smoother(model: &LinearGaussian, kf: &KalmanOutput) -> Result<Smoothe
 
     for k in (0..n1 - 1).rev() {
         // Jᵀ = P_{k+1|k}⁻¹ A P_{k|k}  (P's symmetric), by Cholesky of P_{k+1|k}.
-        cholesky_into("predicted covariance P_{k+1|k}", &kf.predicted_covs[k + 1], &mut l)?;
+        cholesky_into(
+            "predicted covariance P_{k+1|k}",
+            &kf.predicted_covs[k + 1],
+            &mut l,
+        )?;
         jt.gemm(1.0, model.a(), &kf.filtered_covs[k], 0.0);
         l.solve_lower_triangular_unchecked_mut(&mut jt);
         l.tr_solve_lower_triangular_unchecked_mut(&mut jt);
@@ -123,7 +130,10 @@ mod tests {
         let ys = observations(&model, n, &[3], 5);
         let kf = kalman_filter(&model, &ys, None).unwrap();
         let sm = rts_smoother(&model, &kf).unwrap();
-        assert_eq!((sm.means.len(), sm.covs.len(), sm.cross_covs.len()), (n + 1, n + 1, n));
+        assert_eq!(
+            (sm.means.len(), sm.covs.len(), sm.cross_covs.len()),
+            (n + 1, n + 1, n)
+        );
         let post = joint_gaussian_posterior(&model, &ys).unwrap();
         // Dense Cholesky of the 18×18 joint precision vs the recursion: both backward
         // stable, condition numbers O(10) for this model, so errors ≲ κ·N·ε ≈ 200ε;

@@ -46,7 +46,7 @@ impl NoisyAr1 {
     /// # Errors
     /// σ or ρ not positive, or φ not in (−1, 1).
     pub fn new(phi: f64, sigma: f64, rho: f64) -> Result<Self> {
-        if !(phi.abs() < 1.0) {
+        if phi.is_nan() || phi.abs() >= 1.0 {
             return Err(CoreError::InvalidParameter {
                 name: "phi",
                 value: phi,
@@ -62,6 +62,29 @@ impl NoisyAr1 {
             m0: 0.0,
             s0: sigma / (1.0 - phi * phi).sqrt(),
         })
+    }
+
+    /// Any finite φ (no stationarity needed) with the initial law `N(m0, s0²)`; for
+    /// parameter searches such as EM, whose iterates may leave (−1, 1).
+    ///
+    /// # Errors
+    /// φ or `m0` not finite, or σ, ρ, `s0` not positive.
+    pub fn with_prior(phi: f64, sigma: f64, rho: f64, m0: f64, s0: f64) -> Result<Self> {
+        if !phi.is_finite() {
+            return Err(CoreError::InvalidParameter {
+                name: "phi",
+                value: phi,
+                reason: "must be finite",
+            });
+        }
+        let model = NoisyAr1 {
+            phi,
+            sigma: positive("sigma", sigma)?,
+            rho: positive("rho", rho)?,
+            m0: 0.0,
+            s0: 1.0,
+        };
+        model.with_initial(m0, s0)
     }
 
     /// Replace the initial law by `N(m0, s0²)`.
@@ -152,7 +175,15 @@ mod tests {
         assert!(NoisyAr1::new(0.98, 0.0, 1.0).is_err());
         assert!(NoisyAr1::new(0.98, 0.2, -1.0).is_err());
         assert!(NoisyAr1::new(1.0, 0.2, 1.0).is_err());
-        assert!(NoisyAr1::new(0.5, 0.2, 1.0).unwrap().with_initial(0.0, 0.0).is_err());
+        assert!(
+            NoisyAr1::new(0.5, 0.2, 1.0)
+                .unwrap()
+                .with_initial(0.0, 0.0)
+                .is_err()
+        );
+        assert!(NoisyAr1::with_prior(1.2, 0.2, 1.0, 0.0, 1.0).is_ok());
+        assert!(NoisyAr1::with_prior(f64::NAN, 0.2, 1.0, 0.0, 1.0).is_err());
+        assert!(NoisyAr1::with_prior(0.5, 0.2, 0.0, 0.0, 1.0).is_err());
     }
 
     #[test]

@@ -100,7 +100,7 @@ impl<S, O: Observer<S>> Observer<S> for Every<O> {
         self.inner.on_start(n)
     }
     fn on_step(&mut self, view: &StepView<'_, S>) {
-        if view.report.t % self.every == 0 {
+        if view.report.t.is_multiple_of(self.every) {
             self.inner.on_step(view)
         }
     }

@@ -110,12 +110,7 @@ impl<W: Fn(usize) -> f64> InverseCdf<W> {
     /// no buffer).
     pub fn new(n: usize, w: W) -> Self {
         let c = w(0);
-        InverseCdf {
-            w,
-            n,
-            j: 0,
-            c,
-        }
+        InverseCdf { w, n, j: 0, c }
     }
 
     /// The smallest `j` with `u < C_j`, clamped to `N − 1`. `u` must not decrease between calls.

@@ -22,7 +22,11 @@ impl Resample for Multinomial {
 }
 
 /// Call `f(i, u_(i))` with the order statistics `u_(0) ≤ … ≤ u_(m−1)` of `m` uniforms.
-pub(crate) fn sorted_uniforms<R: Rng + ?Sized>(m: usize, rng: &mut R, mut f: impl FnMut(usize, f64)) {
+pub(crate) fn sorted_uniforms<R: Rng + ?Sized>(
+    m: usize,
+    rng: &mut R,
+    mut f: impl FnMut(usize, f64),
+) {
     let mut s = 1.0_f64;
     for i in 0..m {
         let e: f64 = Exp1.sample(rng);
