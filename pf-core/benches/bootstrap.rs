@@ -4,7 +4,8 @@
 #![allow(missing_docs)] // criterion's macros generate undocumented items
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use pf_core::filter::{FilterConfig, ParticleFilter};
+use pf_core::filter::{BatchBootstrap, BatchConfig, FilterConfig, ParticleFilter};
+use pf_core::mc::Par;
 use pf_core::mc::stream_rng;
 use pf_core::models::NoisyAr1;
 use std::hint::black_box;
@@ -38,5 +39,28 @@ fn bootstrap(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bootstrap);
+/// The structure-of-arrays fast path, on one thread and on the current pool (both cores).
+fn batch(c: &mut Criterion) {
+    let model = NoisyAr1::new(0.98, 0.2, 1.0).expect("valid parameters");
+    let (_, ys) = model.simulate(STEPS - 1, &mut stream_rng(1, 0));
+    let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
+    let mut group = c.benchmark_group("batch_ar1");
+    group.sample_size(10);
+    for n in [1_000usize, 10_000, 100_000, 1_000_000] {
+        group.throughput(Throughput::Elements((n * STEPS) as u64));
+        for (name, par) in [("1-thread", Par::Seq), ("rayon", Par::Rayon)] {
+            let cfg = BatchConfig {
+                par,
+                ..BatchConfig::new(n, 2)
+            };
+            let mut f = BatchBootstrap::new(model, cfg).expect("valid config");
+            group.bench_with_input(BenchmarkId::new(name, format!("N={n}")), &n, |b, _| {
+                b.iter(|| black_box(f.run(&ys).expect("filter runs").log_lik))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bootstrap, batch);
 criterion_main!(benches);

@@ -12,11 +12,13 @@
 //! The log-likelihood estimate is `Σ_k log ĉ_k` (Cappé & Moulines, eq. (3)); with adaptive
 //! resampling `ĉ_k = Σ_i W̄_{k−1}^i w̃_k^i` keeps it unbiased on the natural scale.
 
+pub mod batch;
 mod mutation;
 mod policy;
 mod report;
 mod sir;
 
+pub use batch::{BatchBootstrap, BatchConfig, ScalarModel};
 pub use mutation::{Bootstrap, Guided, Mutation};
 pub use policy::{EssThreshold, ResamplePolicy};
 pub use report::{RunSummary, StepReport};

@@ -1,6 +1,7 @@
 //! The noisy AR(1) model of Cappé & Moulines, Section 5.
 
 use crate::error::{CoreError, Result};
+use crate::filter::ScalarModel;
 use crate::model::{StateSpaceModel, TransitionDensity};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -163,6 +164,23 @@ impl TransitionDensity for NoisyAr1 {
     fn log_transition_density(&self, _t: usize, x_prev: &f64, x: &f64, _u: Option<&()>) -> f64 {
         let e = (x - self.phi * x_prev) / self.sigma;
         -0.5 * (e * e + LN_2PI) - self.sigma.ln()
+    }
+}
+
+impl ScalarModel for NoisyAr1 {
+    #[inline]
+    fn initial_from_normal(&self, z: f64) -> f64 {
+        self.m0 + self.s0 * z
+    }
+
+    #[inline]
+    fn transition_from_normal(&self, _t: usize, x_prev: f64, z: f64) -> f64 {
+        self.phi * x_prev + self.sigma * z
+    }
+
+    #[inline]
+    fn log_likelihood_scalar(&self, t: usize, x: f64, y: f64) -> f64 {
+        StateSpaceModel::log_likelihood(self, t, &x, &y)
     }
 }
 
