@@ -19,7 +19,7 @@
 use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
-use crate::resample::{Resample, Resampler};
+use crate::resample::{Resample, Resampler, ceil_to_usize};
 use crate::weights::exp_nonpositive;
 use rand::RngExt;
 use rand_distr::{Distribution, StandardNormal};
@@ -331,7 +331,7 @@ impl<M: ScalarModel> BatchBootstrap<M> {
                         n
                     } else {
                         let g = offset[j / c] + cw[j];
-                        ((g * scale - u).ceil().max(0.0) as usize).min(n)
+                        ceil_to_usize(g * scale - u).min(n)
                     }
                 };
                 let fill = |(d, out): (usize, &mut [usize])| {

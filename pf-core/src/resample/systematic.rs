@@ -21,30 +21,49 @@ impl Resample for Systematic {
 }
 
 /// Systematic resampling with a given `U ∈ [0, 1)`.
+///
+/// Branch-free in two passes: scatter a +1 at each boundary `k_j = ⌈M·C_j − U⌉`, then a
+/// prefix sum turns the marks into ancestors, since `A_i = #{j : k_j ≤ i}` is the smallest
+/// `j` with `k_j > i` (`k` is non-decreasing in `j`).
 pub(crate) fn systematic_from_uniform(w: &[f64], u: f64, ancestors: &mut [usize]) {
     let m = ancestors.len();
     let mf = m as f64;
-    let last = w.len() - 1;
+    ancestors.fill(0);
     let mut c = 0.0;
-    let mut written = 0usize;
-    for (j, &wj) in w.iter().enumerate() {
+    // The last particle's boundary is M by definition (the clamp), so it marks nothing.
+    for &wj in &w[..w.len() - 1] {
         c += wj;
-        let k = if j == last {
-            m
-        } else {
-            ((mf * c - u).ceil().max(0.0) as usize).min(m)
-        };
-        if k > written {
-            ancestors[written..k].fill(j);
-            written = k;
+        let k = ceil_to_usize(mf * c - u).min(m);
+        if k < m {
+            ancestors[k] += 1;
         }
     }
+    let mut acc = 0;
+    for a in ancestors.iter_mut() {
+        acc += *a;
+        *a = acc;
+    }
+}
+
+/// `⌈x⌉` for `x > −1`, as an index, without a libm call (`ceil` is one on baseline x86-64).
+/// The float-to-int cast saturates, so negative `x` gives 0, which is `⌈x⌉` on (−1, 0].
+#[inline]
+pub(crate) fn ceil_to_usize(x: f64) -> usize {
+    let f = x as usize;
+    f + usize::from((f as f64) < x)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::resample::InverseCdf;
+
+    #[test]
+    fn ceil_matches_std() {
+        for &x in &[-0.999, -0.5, 0.0, 0.2, 1.0, 1.000_000_1, 41.5, 1e6] {
+            assert_eq!(ceil_to_usize(x), (x as f64).ceil().max(0.0) as usize, "{x}");
+        }
+    }
 
     /// The direct count gives the same ancestors as the textbook merge.
     #[test]
