@@ -334,24 +334,37 @@ impl<M: ScalarModel> BatchBootstrap<M> {
                         ceil_to_usize(g * scale - u).min(n)
                     }
                 };
+                // The scatter-and-prefix-sum of `Systematic`, restricted to one output chunk
+                // [lo, hi): A_i = j0 + #{j ≥ j0 : k_j ≤ i}, where j0 is the first j with
+                // k_j > lo (found by bisection, as k is non-decreasing).
                 let fill = |(d, out): (usize, &mut [usize])| {
                     let lo = d * c;
                     let hi = lo + out.len();
-                    // First j with k(j) > lo: k is non-decreasing in j.
                     let (mut a, mut b) = (0usize, n - 1);
                     while a < b {
                         let mid = (a + b) / 2;
                         if k(mid) > lo { b = mid } else { a = mid + 1 }
                     }
-                    let mut written = lo;
+                    out.fill(0);
                     let mut j = a;
-                    while written < hi {
-                        let kj = k(j).min(hi);
-                        if kj > written {
-                            out[written - lo..kj - lo].fill(j);
-                            written = kj;
+                    let mut chunk_end = (j / c + 1) * c;
+                    let mut base = offset[j / c];
+                    while j + 1 < n {
+                        if j == chunk_end {
+                            base = offset[j / c];
+                            chunk_end += c;
                         }
+                        let kj = ceil_to_usize((base + cw[j]) * scale - u);
+                        if kj >= hi {
+                            break;
+                        }
+                        out[kj - lo] += 1;
                         j += 1;
+                    }
+                    let mut acc = a;
+                    for o in out.iter_mut() {
+                        acc += *o;
+                        *o = acc;
                     }
                 };
                 match self.cfg.par {

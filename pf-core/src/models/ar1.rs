@@ -5,7 +5,6 @@ use crate::filter::ScalarModel;
 use crate::model::{StateSpaceModel, TransitionDensity};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
-use serde::{Deserialize, Serialize};
 
 const LN_2PI: f64 = 1.837_877_066_409_345_3;
 
@@ -15,18 +14,16 @@ const LN_2PI: f64 = 1.837_877_066_409_345_3;
 /// The default initial law is the stationary one, `N(0, σ²/(1 − φ²))` when `|φ| < 1`.
 /// Cappé & Moulines' diffuse prior (`φ_0 = N(Y_0, ρ²)`) is [`NoisyAr1::diffuse`]; filter
 /// with `y_0` missing then, since `Y_0` is already in the prior.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NoisyAr1 {
-    /// φ, the autoregression coefficient.
-    pub phi: f64,
-    /// σ, the state noise standard deviation.
-    pub sigma: f64,
-    /// ρ, the observation noise standard deviation.
-    pub rho: f64,
-    /// m_0, the initial mean.
-    pub m0: f64,
-    /// s_0, the initial standard deviation.
-    pub s0: f64,
+    phi: f64,
+    sigma: f64,
+    rho: f64,
+    m0: f64,
+    s0: f64,
+    /// `1/ρ` and `−log ρ − ½ log 2π`, so that the likelihood costs no division or logarithm.
+    inv_rho: f64,
+    log_norm_g: f64,
 }
 
 fn positive(name: &'static str, value: f64) -> Result<f64> {
@@ -54,14 +51,10 @@ impl NoisyAr1 {
                 reason: "must lie in (-1, 1) for the stationary initial law; use with_initial",
             });
         }
-        positive("sigma", sigma)?;
-        positive("rho", rho)?;
+        let model = Self::build(phi, positive("sigma", sigma)?, positive("rho", rho)?);
         Ok(NoisyAr1 {
-            phi,
-            sigma,
-            rho,
-            m0: 0.0,
             s0: sigma / (1.0 - phi * phi).sqrt(),
+            ..model
         })
     }
 
@@ -78,14 +71,45 @@ impl NoisyAr1 {
                 reason: "must be finite",
             });
         }
-        let model = NoisyAr1 {
+        Self::build(phi, positive("sigma", sigma)?, positive("rho", rho)?).with_initial(m0, s0)
+    }
+
+    /// Validated parameters in, cached constants out; initial law `N(0, 1)`.
+    fn build(phi: f64, sigma: f64, rho: f64) -> Self {
+        NoisyAr1 {
             phi,
-            sigma: positive("sigma", sigma)?,
-            rho: positive("rho", rho)?,
+            sigma,
+            rho,
             m0: 0.0,
             s0: 1.0,
-        };
-        model.with_initial(m0, s0)
+            inv_rho: 1.0 / rho,
+            log_norm_g: -rho.ln() - 0.5 * LN_2PI,
+        }
+    }
+
+    /// φ, the autoregression coefficient.
+    pub fn phi(&self) -> f64 {
+        self.phi
+    }
+
+    /// σ, the state noise standard deviation.
+    pub fn sigma(&self) -> f64 {
+        self.sigma
+    }
+
+    /// ρ, the observation noise standard deviation.
+    pub fn rho(&self) -> f64 {
+        self.rho
+    }
+
+    /// `m_0`, the initial mean.
+    pub fn m0(&self) -> f64 {
+        self.m0
+    }
+
+    /// `s_0`, the initial standard deviation.
+    pub fn s0(&self) -> f64 {
+        self.s0
     }
 
     /// Replace the initial law by `N(m0, s0²)`.
@@ -155,8 +179,8 @@ impl StateSpaceModel for NoisyAr1 {
 
     #[inline]
     fn log_likelihood(&self, _t: usize, x: &f64, y: &f64) -> f64 {
-        let e = (y - x) / self.rho;
-        -0.5 * (e * e + LN_2PI) - self.rho.ln()
+        let e = (y - x) * self.inv_rho;
+        self.log_norm_g - 0.5 * e * e
     }
 }
 

@@ -1,0 +1,287 @@
+//! The noisy AR(1) model of Section 5: its EM statistics `τ_{n,1…4}`, the M-step
+//! (10)–(12) and the score by Fisher's identity.
+//!
+//! `X_{k+1} = φ X_k + σ U_k`, `Y_k = X_k + ρ V_k`, with the diffuse (flat) prior on `X_0`, so
+//! that the first filtering law is `N(Y_0, ρ²)`. The model itself is
+//! [`pf_core::models::NoisyAr1`]; [`Theta::model`] builds it with that prior, to be filtered
+//! with `y_0` missing (it is already in the prior).
+
+use crate::error::{Result, SmoothError, finite, positive};
+use crate::functional::AdditiveFunctional;
+use pf_core::models::NoisyAr1;
+use serde::{Deserialize, Serialize};
+
+/// The parameter `θ = (φ, σ², ρ²)`, in the variances the EM updates produce.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Theta {
+    /// φ, the autoregression coefficient.
+    pub phi: f64,
+    /// σ², the state noise variance.
+    pub sigma2: f64,
+    /// ρ², the observation noise variance.
+    pub rho2: f64,
+}
+
+impl Theta {
+    /// `θ` from the standard deviations σ and ρ, as the paper and the CLI give them.
+    ///
+    /// # Errors
+    /// φ not finite, or σ, ρ not positive and finite.
+    pub fn from_std(phi: f64, sigma: f64, rho: f64) -> Result<Self> {
+        let t = Theta {
+            phi,
+            sigma2: sigma * sigma,
+            rho2: rho * rho,
+        };
+        finite("phi", phi)?;
+        positive("sigma", sigma)?;
+        positive("rho", rho)?;
+        t.validate()?;
+        Ok(t)
+    }
+
+    /// The data-generating parameter of Section 5: φ = 0.98, σ = 0.2, ρ = 1.
+    pub fn paper_truth() -> Self {
+        Theta {
+            phi: 0.98,
+            sigma2: 0.04,
+            rho2: 1.0,
+        }
+    }
+
+    /// The current estimate of Figs. 2–3: φ = 0.8, σ = 0.5, ρ = 2.
+    pub fn paper_start() -> Self {
+        Theta {
+            phi: 0.8,
+            sigma2: 0.25,
+            rho2: 4.0,
+        }
+    }
+
+    /// Check φ finite and σ², ρ² positive and finite.
+    ///
+    /// # Errors
+    /// [`SmoothError::InvalidParameter`] naming the parameter.
+    pub fn validate(&self) -> Result<()> {
+        finite("phi", self.phi)?;
+        positive("sigma2", self.sigma2)?;
+        positive("rho2", self.rho2)?;
+        Ok(())
+    }
+
+    /// The model at `θ` with the diffuse prior, `X_0 ~ N(y_0, ρ²)` (filter it with `y_0`
+    /// missing). φ need not lie in (−1, 1): no stationary law is used.
+    ///
+    /// # Errors
+    /// As [`validate`](Self::validate), or a non-finite `y0`.
+    pub fn model(&self, y0: f64) -> Result<NoisyAr1> {
+        self.validate()?;
+        let rho = self.rho2.sqrt();
+        Ok(NoisyAr1::with_prior(self.phi, self.sigma2.sqrt(), rho, 0.0, rho)?.diffuse(y0)?)
+    }
+}
+
+/// Observations `Y_0, …, Y_n` (n ≥ 1), checked finite.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Ar1Data {
+    y: Vec<f64>,
+}
+
+impl Ar1Data {
+    /// Check and wrap `Y_0…Y_n`.
+    ///
+    /// # Errors
+    /// Fewer than 2 values ([`SmoothError::TooFewObservations`]) or a NaN/infinite one
+    /// ([`SmoothError::NonFiniteObservation`] with its index).
+    pub fn new(y: Vec<f64>) -> Result<Self> {
+        if y.len() < 2 {
+            return Err(SmoothError::TooFewObservations {
+                got: y.len(),
+                need: 2,
+            });
+        }
+        if let Some((index, &value)) = y.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(SmoothError::NonFiniteObservation { index, value });
+        }
+        Ok(Ar1Data { y })
+    }
+
+    /// [`new`](Self::new) from a slice.
+    ///
+    /// # Errors
+    /// As [`new`](Self::new).
+    pub fn from_slice(y: &[f64]) -> Result<Self> {
+        Self::new(y.to_vec())
+    }
+
+    /// `n`: the index of the last observation (there are n + 1).
+    pub fn n(&self) -> usize {
+        self.y.len() - 1
+    }
+
+    /// `Y_0…Y_n`.
+    pub fn y(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// The first `n + 1` observations `Y_0…Y_n`.
+    ///
+    /// # Errors
+    /// `n` = 0 or beyond the data.
+    pub fn prefix(&self, n: usize) -> Result<Self> {
+        if n + 1 > self.y.len() {
+            return Err(SmoothError::TooFewObservations {
+                got: self.y.len(),
+                need: n + 1,
+            });
+        }
+        Self::new(self.y[..=n].to_vec())
+    }
+
+    /// The sequence to filter under the diffuse prior: `y_0` missing (it is in the prior),
+    /// then `Some(Y_k)`.
+    pub fn filter_input(&self) -> Vec<Option<f64>> {
+        std::iter::once(None)
+            .chain(self.y[1..].iter().copied().map(Some))
+            .collect()
+    }
+}
+
+/// The four statistics of Section 5 as one additive functional of dimension 4:
+/// `Σ_{k=0}^{n−1} X_k²`, `Σ_{k=0}^{n−1} X_k X_{k+1}`, `Σ_{k=1}^n X_k²`, `Σ_{k=0}^n (Y_k − X_k)²`.
+#[derive(Debug, Clone, Copy)]
+pub struct Ar1Statistics<'a> {
+    y: &'a [f64],
+}
+
+impl<'a> Ar1Statistics<'a> {
+    /// The statistics of the data `y`.
+    pub fn new(data: &'a Ar1Data) -> Self {
+        Ar1Statistics { y: data.y() }
+    }
+}
+
+impl AdditiveFunctional<f64> for Ar1Statistics<'_> {
+    fn dim(&self) -> usize {
+        4
+    }
+
+    fn initial(&self, x0: &f64, out: &mut [f64]) {
+        let e = self.y[0] - x0;
+        out[3] += e * e;
+    }
+
+    #[inline]
+    fn increment(&self, k: usize, x_prev: &f64, x: &f64, out: &mut [f64]) {
+        // A step beyond the data has no Y_k: NaN, which the estimate reports as an error.
+        let y = self.y.get(k).copied().unwrap_or(f64::NAN);
+        let e = y - x;
+        out[0] += x_prev * x_prev;
+        out[1] += x_prev * x;
+        out[2] += x * x;
+        out[3] += e * e;
+    }
+}
+
+/// Estimates of `τ_{n,1}, …, τ_{n,4}` for `Y_{0:n}`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SuffStats {
+    /// n.
+    pub n: usize,
+    /// `[τ_{n,1}, τ_{n,2}, τ_{n,3}, τ_{n,4}]`.
+    pub tau: [f64; 4],
+}
+
+impl SuffStats {
+    /// From a 4-vector estimate.
+    ///
+    /// # Errors
+    /// A vector that is not of length 4.
+    pub fn from_slice(n: usize, v: &[f64]) -> Result<Self> {
+        let tau: [f64; 4] = v.try_into().map_err(|_| pf_core::CoreError::DimensionMismatch {
+            what: "AR(1) statistics",
+            expected: 4,
+            got: v.len(),
+        })?;
+        Ok(SuffStats { n, tau })
+    }
+
+    /// The EM update, eqs. (10)–(12): `φ̂ = τ₂/τ₁`, `σ̂² = (τ₃ − φ̂ τ₂)/n`,
+    /// `ρ̂² = τ₄/(n + 1)`.
+    ///
+    /// # Errors
+    /// [`SmoothError::DegenerateUpdate`] if the result is not a valid parameter (`τ₁ = 0`,
+    /// `σ̂² ≤ 0`, or a non-finite value).
+    pub fn m_step(&self) -> Result<Theta> {
+        let [t1, t2, t3, t4] = self.tau;
+        let n = self.n as f64;
+        let phi = t2 / t1;
+        let sigma2 = (t3 - phi * t2) / n;
+        let rho2 = t4 / (n + 1.0);
+        let bad = |what, value: f64, ok: bool| {
+            if ok && value.is_finite() {
+                Ok(())
+            } else {
+                Err(SmoothError::DegenerateUpdate { what, value })
+            }
+        };
+        bad("phi (eq. 10)", phi, true)?;
+        bad("sigma2 (eq. 11)", sigma2, sigma2 > 0.0)?;
+        bad("rho2 (eq. 12)", rho2, rho2 > 0.0)?;
+        Ok(Theta { phi, sigma2, rho2 })
+    }
+
+    /// The score `∇ℓ_n(θ)` with respect to `(φ, σ², ρ²)` by Fisher's identity: the
+    /// conditional expectation of the complete-data score, linear in the statistics:
+    /// ```text
+    /// ∂ℓ/∂φ  = (τ₂ − φ τ₁)/σ²
+    /// ∂ℓ/∂σ² = −n/(2σ²) + (τ₃ − 2φ τ₂ + φ² τ₁)/(2σ⁴)
+    /// ∂ℓ/∂ρ² = −(n + 1)/(2ρ²) + τ₄/(2ρ⁴)
+    /// ```
+    /// The statistics must have been computed at the same `θ`.
+    pub fn score(&self, theta: &Theta) -> Theta {
+        let [t1, t2, t3, t4] = self.tau;
+        let n = self.n as f64;
+        let Theta { phi, sigma2, rho2 } = *theta;
+        Theta {
+            phi: (t2 - phi * t1) / sigma2,
+            sigma2: -n / (2.0 * sigma2) + (t3 - 2.0 * phi * t2 + phi * phi * t1) / (2.0 * sigma2 * sigma2),
+            rho2: -(n + 1.0) / (2.0 * rho2) + t4 / (2.0 * rho2 * rho2),
+        }
+    }
+}
+
+/// Replicated values of the three parameters, one entry per replication; the JSON shape
+/// `{"phi": [...], "sigma2": [...], "rho2": [...]}` of the CLI contract.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ThetaSamples {
+    /// φ per replication.
+    pub phi: Vec<f64>,
+    /// σ² per replication.
+    pub sigma2: Vec<f64>,
+    /// ρ² per replication.
+    pub rho2: Vec<f64>,
+}
+
+impl ThetaSamples {
+    /// Gather per-replication values.
+    pub fn from_thetas(thetas: &[Theta]) -> Self {
+        ThetaSamples {
+            phi: thetas.iter().map(|t| t.phi).collect(),
+            sigma2: thetas.iter().map(|t| t.sigma2).collect(),
+            rho2: thetas.iter().map(|t| t.rho2).collect(),
+        }
+    }
+
+    /// Number of replications.
+    pub fn len(&self) -> usize {
+        self.phi.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.phi.is_empty()
+    }
+}
