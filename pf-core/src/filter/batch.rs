@@ -8,7 +8,7 @@
 //!    against the global cumulative weights, so chunks run in parallel);
 //! 2. gather, propagate and weigh in one pass, with standard normals from the chunk's own
 //!    random stream;
-//! 3. exponentiate (branch-free [`exp_nonpositive`]) and accumulate within each chunk;
+//! 3. exponentiate and accumulate within each chunk;
 //!    chunk totals are combined in chunk order.
 //!
 //! Chunks, streams and the order of every reduction are fixed by `N` and the chunk size,
@@ -20,7 +20,6 @@ use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
 use crate::resample::{Resample, Resampler, ceil_to_usize};
-use crate::weights::exp_nonpositive;
 use rand::RngExt;
 use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
@@ -266,7 +265,7 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             let mut acc = 0.0;
             let mut sq = 0.0;
             for (cw, &l) in cws.iter_mut().zip(lws) {
-                let w = exp_nonpositive(l - max);
+                let w = (l - max).exp();
                 acc += w;
                 sq += w * w;
                 *cw = acc;
