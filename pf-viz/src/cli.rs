@@ -1,0 +1,92 @@
+//! The command line, as clap derive types. Parsing only: [`crate::run`] acts on it.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use serde::{Deserialize, Serialize};
+
+/// `pf-viz`: figures, tables and Rerun recordings for the pf papers.
+#[derive(Debug, Parser)]
+#[command(name = "pf-viz", version, about, propagate_version = true)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run every report section and write its figures, recordings and summary.json.
+    Report(ReportArgs),
+}
+
+/// Arguments of `pf-viz report`.
+#[derive(Debug, Clone, Args)]
+pub struct ReportArgs {
+    /// Output directory (created if missing; must be writable).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Master seed; every section derives its random streams from it.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// Do not write Rerun `.rrd` recordings.
+    #[arg(long)]
+    pub no_rrd: bool,
+}
+
+/// How much Monte Carlo work a run does. Sections map it to replication counts and problem
+/// sizes; `Default` reproduces the papers' figures at a laptop-friendly cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Scale {
+    /// A smoke test: seconds, noisy figures.
+    Quick,
+    /// The standard report.
+    #[default]
+    Default,
+    /// The papers' own replication counts.
+    Full,
+}
+
+/// Whether `.rrd` recordings are written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RrdOutput {
+    /// Write them (when pf-viz is built with the `rrd` feature).
+    Write,
+    /// Skip them.
+    Skip,
+}
+
+impl RrdOutput {
+    /// From the `--no-rrd` flag and the build: `Skip` if either says so.
+    pub fn from_flag(no_rrd: bool) -> Self {
+        if no_rrd || !cfg!(feature = "rrd") {
+            RrdOutput::Skip
+        } else {
+            RrdOutput::Write
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn cli_is_well_formed() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn report_defaults() {
+        let cli = Cli::try_parse_from(["pf-viz", "report", "--out", "x"]).unwrap();
+        let Command::Report(a) = cli.command;
+        assert_eq!(a.seed, 1);
+        assert!(!a.no_rrd);
+        assert!(Cli::try_parse_from(["pf-viz", "report"]).is_err());
+        assert!(Cli::try_parse_from(["pf-viz", "report", "--out", "x", "--seed", "-3"]).is_err());
+    }
+}

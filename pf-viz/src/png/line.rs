@@ -1,0 +1,302 @@
+//! Line plots: one or more series against a common x-axis, each with an optional shaded band
+//! (a confidence or Monte Carlo interval), plus labelled horizontal reference lines.
+
+use std::path::Path;
+
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::style::{self, Dash, Marker, plot_err};
+use super::{Canvas, render_png};
+use crate::error::{Result, VizError};
+
+/// A shaded band `lower[j] ≤ y ≤ upper[j]` at the series' x values.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Band {
+    /// Lower edge.
+    pub lower: Vec<f64>,
+    /// Upper edge.
+    pub upper: Vec<f64>,
+}
+
+/// One series of a line plot. Its look is [`style::SERIES`]`[index % 4]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Series {
+    /// Legend entry.
+    pub name: String,
+    /// x values.
+    pub x: Vec<f64>,
+    /// y values (same length as `x`).
+    pub y: Vec<f64>,
+    /// Optional band around the series.
+    pub band: Option<Band>,
+}
+
+/// A labelled horizontal reference line (a threshold, a true value).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RefLine {
+    /// Height.
+    pub y: f64,
+    /// Legend entry.
+    pub label: String,
+}
+
+/// A complete line plot.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LinePlot {
+    /// Figure title.
+    pub title: String,
+    /// x-axis description, with units.
+    pub x_label: String,
+    /// y-axis description, with units.
+    pub y_label: String,
+    /// The series, in drawing order.
+    pub series: Vec<Series>,
+    /// Horizontal reference lines.
+    pub ref_lines: Vec<RefLine>,
+    /// Fixed y range; `None` fits the data, bands and reference lines.
+    pub y_range: Option<(f64, f64)>,
+}
+
+impl LinePlot {
+    /// Check lengths and finiteness.
+    ///
+    /// # Errors
+    /// [`VizError::PlotData`] naming the first bad series.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |message: String| {
+            Err(VizError::PlotData {
+                what: "line plot",
+                message,
+            })
+        };
+        if self.series.iter().all(|s| s.x.is_empty()) {
+            return bad("no data points".into());
+        }
+        for s in &self.series {
+            if s.x.len() != s.y.len() {
+                return bad(format!(
+                    "series '{}': {} x values, {} y values",
+                    s.name,
+                    s.x.len(),
+                    s.y.len()
+                ));
+            }
+            if let Some(b) = &s.band
+                && (b.lower.len() != s.x.len() || b.upper.len() != s.x.len())
+            {
+                return bad(format!(
+                    "series '{}': band length differs from the series",
+                    s.name
+                ));
+            }
+            let values =
+                s.x.iter()
+                    .chain(&s.y)
+                    .chain(s.band.iter().flat_map(|b| b.lower.iter().chain(&b.upper)));
+            if let Some(v) = values.into_iter().find(|v| !v.is_finite()) {
+                return bad(format!("series '{}': value {v} is not finite", s.name));
+            }
+        }
+        if let Some((lo, hi)) = self.y_range
+            && !(lo < hi)
+        {
+            return bad(format!("empty y range {lo}..{hi}"));
+        }
+        Ok(())
+    }
+
+    fn extent(&self) -> ((f64, f64), (f64, f64)) {
+        let fold = |it: &mut dyn Iterator<Item = f64>| {
+            it.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            })
+        };
+        let x = fold(&mut self.series.iter().flat_map(|s| s.x.iter().copied()));
+        let y = fold(
+            &mut self
+                .series
+                .iter()
+                .flat_map(|s| {
+                    s.y.iter()
+                        .chain(s.band.iter().flat_map(|b| b.lower.iter().chain(&b.upper)))
+                })
+                .copied()
+                .chain(self.ref_lines.iter().map(|r| r.y)),
+        );
+        (x, y)
+    }
+}
+
+/// Draw `plot` to the PNG file `path`.
+///
+/// # Errors
+/// Inconsistent data ([`VizError::PlotData`]), or a plot or I/O error naming `path`.
+pub fn render(path: &Path, plot: &LinePlot) -> Result<()> {
+    plot.validate()?;
+    render_png(path, |root| draw(root, path, plot))
+}
+
+fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
+    let err = plot_err(path);
+    let ((x_lo, x_hi), (y_lo, y_hi)) = plot.extent();
+    let (x_lo, x_hi) = style::padded(x_lo, x_hi, 0.01);
+    let (y_lo, y_hi) = plot
+        .y_range
+        .unwrap_or_else(|| style::padded(y_lo, y_hi, 0.06));
+    let mut chart = ChartBuilder::on(root)
+        .caption(&plot.title, style::title())
+        .margin(style::MARGIN_PX)
+        .x_label_area_size(style::X_LABEL_AREA_PX)
+        .y_label_area_size(style::Y_LABEL_AREA_PX)
+        .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)
+        .map_err(&err)?;
+    chart
+        .configure_mesh()
+        .x_desc(&plot.x_label)
+        .y_desc(&plot.y_label)
+        .axis_desc_style(style::text(style::LABEL_PX))
+        .label_style(style::text(style::TICK_PX))
+        .x_label_formatter(&|x| trim(*x))
+        .y_label_formatter(&|y| trim(*y))
+        .bold_line_style(style::GRID.stroke_width(1))
+        .light_line_style(WHITE.stroke_width(0))
+        .axis_style(style::INK.stroke_width(1))
+        .draw()
+        .map_err(&err)?;
+
+    // Bands first, so every line stays visible on top of every band.
+    for (j, s) in plot.series.iter().enumerate() {
+        if let Some(b) = &s.band {
+            let look = style::SERIES[j % style::SERIES.len()];
+            let outline: Vec<(f64, f64)> =
+                s.x.iter()
+                    .zip(&b.upper)
+                    .map(|(&x, &y)| (x, y))
+                    .chain(s.x.iter().zip(&b.lower).rev().map(|(&x, &y)| (x, y)))
+                    .collect();
+            chart
+                .draw_series(std::iter::once(Polygon::new(
+                    outline,
+                    look.color.mix(style::BAND_ALPHA).filled(),
+                )))
+                .map_err(&err)?;
+        }
+    }
+
+    for (j, s) in plot.series.iter().enumerate() {
+        let look = style::SERIES[j % style::SERIES.len()];
+        let stroke = look.stroke();
+        let points: Vec<(f64, f64)> = s.x.iter().copied().zip(s.y.iter().copied()).collect();
+        let anno = match look.dash {
+            Dash::Solid => chart.draw_series(LineSeries::new(points.clone(), stroke)),
+            Dash::Dashed { on, off } => {
+                chart.draw_series(DashedLineSeries::new(points.clone(), on, off, stroke))
+            }
+        }
+        .map_err(&err)?;
+        let name = match &s.band {
+            Some(_) => format!("{} (shaded: band)", s.name),
+            None => s.name.clone(),
+        };
+        // The legend shows the stroke only: plotters' composed legend elements cannot borrow
+        // the in-memory backend, so dashes and markers appear on the series, not the key.
+        anno.label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 30, y)], stroke));
+        match look.marker {
+            Marker::None => {}
+            Marker::Circle => {
+                chart
+                    .draw_series(
+                        points
+                            .iter()
+                            .map(|&c| Circle::new(c, 4, look.color.filled())),
+                    )
+                    .map_err(&err)?;
+            }
+            Marker::Cross => {
+                chart
+                    .draw_series(points.iter().map(|&c| Cross::new(c, 5, stroke)))
+                    .map_err(&err)?;
+            }
+        }
+    }
+
+    for r in &plot.ref_lines {
+        let look = style::INK.stroke_width(1);
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(x_lo, r.y), (x_hi, r.y)],
+                3,
+                5,
+                look,
+            ))
+            .map_err(&err)?
+            .label(r.label.clone())
+            .legend(move |(x, y)| DashedPathElement::new(vec![(x, y), (x + 30, y)], 3, 4, look));
+    }
+
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
+        .margin(12)
+        .legend_area_size(40)
+        .label_font(style::text(style::LEGEND_PX))
+        .background_style(WHITE.mix(0.88))
+        .border_style(style::MID_GREY)
+        .draw()
+        .map_err(&err)?;
+    Ok(())
+}
+
+/// A tick label without trailing zeros: `20`, `0.5`, `1e-3`.
+fn trim(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    if v.abs() >= 1e5 || v.abs() < 1e-3 {
+        return format!("{v:.1e}");
+    }
+    let s = format!("{v:.3}");
+    s.trim_end_matches('0').trim_end_matches('.').to_owned()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(trim(20.0), "20");
+        assert_eq!(trim(0.5), "0.5");
+        assert_eq!(trim(-1.25), "-1.25");
+        assert_eq!(trim(0.0), "0");
+    }
+
+    #[test]
+    fn bad_lengths_are_rejected() {
+        let mut p = LinePlot {
+            title: "t".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            series: vec![Series {
+                name: "s".into(),
+                x: vec![0.0, 1.0],
+                y: vec![1.0, 2.0],
+                band: None,
+            }],
+            ref_lines: vec![],
+            y_range: None,
+        };
+        p.validate().unwrap();
+        p.series[0].band = Some(Band {
+            lower: vec![0.0],
+            upper: vec![1.0, 2.0],
+        });
+        assert!(p.validate().is_err());
+        p.series[0].band = None;
+        p.series[0].y.push(3.0);
+        assert!(p.validate().is_err());
+    }
+}

@@ -1,0 +1,203 @@
+//! The shared look of every pf-viz figure.
+//!
+//! 1200×800 px on white, DejaVu Sans embedded in the binary (no system font is read), a
+//! title of 28 px, axis descriptions of 22 px, tick labels and legends of 18 px. Series are
+//! told apart by lightness *and* by dash pattern or marker, so a figure survives greyscale
+//! printing.
+
+use std::sync::OnceLock;
+
+use plotters::style::{
+    Color, FontFamily, FontStyle, IntoFont, RGBColor, ShapeStyle, TextStyle, register_font,
+};
+
+use crate::error::{Result, VizError};
+
+/// Figure size in pixels, width × height.
+pub const SIZE: (u32, u32) = (1200, 800);
+/// Title font size, px.
+pub const TITLE_PX: u32 = 28;
+/// Axis description font size, px.
+pub const LABEL_PX: u32 = 22;
+/// Tick label font size, px.
+pub const TICK_PX: u32 = 18;
+/// Legend font size, px.
+pub const LEGEND_PX: u32 = 18;
+/// Outer margin, px.
+pub const MARGIN_PX: u32 = 24;
+/// Space reserved below the plot for tick labels and the x-axis description, px.
+pub const X_LABEL_AREA_PX: u32 = 70;
+/// Space reserved left of the plot for tick labels and the y-axis description, px.
+pub const Y_LABEL_AREA_PX: u32 = 90;
+
+/// Near-black, for the series that carries the message.
+pub const INK: RGBColor = RGBColor(25, 25, 25);
+/// Dark blue: the emphasised series (dark in greyscale too).
+pub const DARK_BLUE: RGBColor = RGBColor(20, 60, 140);
+/// Dark red: markers and thresholds (mid-dark in greyscale; always drawn dashed).
+pub const DARK_RED: RGBColor = RGBColor(180, 30, 30);
+/// Mid grey: secondary series.
+pub const MID_GREY: RGBColor = RGBColor(120, 120, 120);
+/// Light grey: context drawn behind everything else.
+pub const LIGHT_GREY: RGBColor = RGBColor(200, 200, 200);
+/// Grid lines.
+pub const GRID: RGBColor = RGBColor(232, 232, 232);
+
+/// The font family name the embedded font is registered under.
+const FAMILY: &str = "sans-serif";
+
+static DEJAVU_SANS: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+static DEJAVU_SANS_BOLD: &[u8] = include_bytes!("../../assets/DejaVuSans-Bold.ttf");
+
+/// Register the embedded fonts with plotters, once per process. Every renderer calls this
+/// before drawing text.
+///
+/// # Errors
+/// [`VizError::PlotData`] if the embedded font cannot be parsed (a build defect).
+pub fn init_fonts() -> Result<()> {
+    static DONE: OnceLock<Result<(), String>> = OnceLock::new();
+    DONE.get_or_init(|| {
+        register_font(FAMILY, FontStyle::Normal, DEJAVU_SANS)
+            .and_then(|()| register_font(FAMILY, FontStyle::Bold, DEJAVU_SANS_BOLD))
+            .map_err(|_| "the embedded DejaVu Sans font cannot be parsed".to_owned())
+    })
+    .clone()
+    .map_err(|message| VizError::PlotData {
+        what: "font",
+        message,
+    })
+}
+
+/// Text in the embedded font at `px` pixels.
+pub fn text(px: u32) -> TextStyle<'static> {
+    (FontFamily::SansSerif, px).into_font().color(&INK)
+}
+
+/// The figure title style.
+pub fn title() -> TextStyle<'static> {
+    (FontFamily::SansSerif, TITLE_PX)
+        .into_font()
+        .style(FontStyle::Bold)
+        .color(&INK)
+}
+
+/// How a line series is stroked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Dash {
+    /// A continuous line.
+    Solid,
+    /// Dashes of `on` px separated by `off` px.
+    Dashed {
+        /// Dash length, px.
+        on: u32,
+        /// Gap length, px.
+        off: u32,
+    },
+}
+
+/// A marker drawn at every data point of a series.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Marker {
+    /// No marker.
+    None,
+    /// A filled circle.
+    Circle,
+    /// An upright cross.
+    Cross,
+}
+
+/// The complete look of one line series.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SeriesStyle {
+    /// Line colour.
+    pub color: RGBColor,
+    /// Line width, px.
+    pub width: u32,
+    /// Stroke pattern.
+    pub dash: Dash,
+    /// Point marker.
+    pub marker: Marker,
+}
+
+impl SeriesStyle {
+    /// The plotters stroke of this series.
+    pub fn stroke(&self) -> ShapeStyle {
+        self.color.stroke_width(self.width)
+    }
+}
+
+/// Series styles in the order figures use them: each differs from the others in greyscale
+/// (lightness) and in pattern, so no colour is needed to tell them apart.
+pub const SERIES: [SeriesStyle; 4] = [
+    SeriesStyle {
+        color: DARK_BLUE,
+        width: 3,
+        dash: Dash::Solid,
+        marker: Marker::None,
+    },
+    SeriesStyle {
+        color: MID_GREY,
+        width: 3,
+        dash: Dash::Dashed { on: 12, off: 8 },
+        marker: Marker::None,
+    },
+    SeriesStyle {
+        color: INK,
+        width: 2,
+        dash: Dash::Solid,
+        marker: Marker::Circle,
+    },
+    SeriesStyle {
+        color: DARK_RED,
+        width: 2,
+        dash: Dash::Dashed { on: 4, off: 6 },
+        marker: Marker::Cross,
+    },
+];
+
+/// Shaded bands (confidence or Monte Carlo intervals) use the series colour at this opacity.
+pub const BAND_ALPHA: f64 = 0.18;
+
+/// Pad a data range by `frac` of its width on both sides (and widen a degenerate range), so
+/// nothing is drawn on the frame.
+pub fn padded(lo: f64, hi: f64, frac: f64) -> (f64, f64) {
+    let (lo, hi) = if lo.is_finite() && hi.is_finite() {
+        (lo, hi)
+    } else {
+        (0.0, 1.0)
+    };
+    let w = hi - lo;
+    if w <= f64::EPSILON * lo.abs().max(hi.abs()).max(1.0) {
+        let h = lo.abs().max(1.0) * 0.5;
+        (lo - h, hi + h)
+    } else {
+        (lo - frac * w, hi + frac * w)
+    }
+}
+
+/// Map a plotters drawing error to [`VizError::Plot`] for the figure at `path`.
+pub fn plot_err<E: std::fmt::Display>(path: &std::path::Path) -> impl Fn(E) -> VizError + '_ {
+    move |e| VizError::Plot {
+        path: path.to_owned(),
+        message: e.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fonts_register_and_repeat() {
+        init_fonts().unwrap();
+        init_fonts().unwrap();
+    }
+
+    #[test]
+    fn padding_widens_and_handles_degenerate_ranges() {
+        assert_eq!(padded(0.0, 10.0, 0.1), (-1.0, 11.0));
+        let (lo, hi) = padded(3.0, 3.0, 0.1);
+        assert!(lo < 3.0 && hi > 3.0);
+        assert_eq!(padded(f64::NAN, 1.0, 0.0), (0.0, 1.0));
+    }
+}

@@ -1,0 +1,330 @@
+//! A particle genealogy as a Rerun recording, scrubbable along the `step` timeline.
+//!
+//! | entity | archetype | at step `k` |
+//! |---|---|---|
+//! | `core/genealogy/all` | `LineStrips2D` | every parent → child segment up to `k`, thin light grey |
+//! | `core/genealogy/particles` | `Points2D` | every particle position up to `k`, small grey |
+//! | `core/genealogy/current` | `Points2D` | the particles of step `k`, area ∝ weight |
+//! | `core/genealogy/lineage_<i>` | `LineStrips2D` | the ancestral line `ξ_{0:k}^i` of particle `i` at `k`, dark |
+//! | `core/genealogy/coalescence` | `LineStrips2D` | the coalescence time, at the last step |
+//! | `core/genealogy/axes` | `LineStrips2D`, `Points2D` | static axes with ticks in `k` and `ξ` |
+//! | `core/ess` | `Scalars` | the effective sample size |
+//!
+//! At the last step the `lineage_<i>` strips are exactly the surviving lineages of the PNG
+//! figure; earlier, they show how the ancestry of the current particles coalesces.
+//!
+//! Rerun's 2D view has its y-axis pointing down and equal scales on both axes, so a point is
+//! logged at `(k, −c·ξ)`, with `c` chosen to give the picture a 5:2 aspect ratio; the axis
+//! ticks are labelled in `k` and `ξ`, so `c` never needs to be known.
+
+use std::path::Path;
+
+use pf_core::genealogy::Genealogy;
+use rerun::blueprint::{Blueprint, BlueprintActivation, Spatial2DView, TimeSeriesView, Vertical};
+use rerun::components::Radius;
+use rerun::{LineStrips2D, Points2D, RecordingStream, Scalars, SeriesLines};
+
+use super::{STEP, rrd_err, save_rrd};
+use crate::error::{Result, VizError};
+use crate::png::genealogy::GenealogyData;
+
+/// Root entity of the genealogy.
+pub const ROOT: &str = "core/genealogy";
+/// Entity of the ESS trace.
+pub const ESS: &str = "core/ess";
+
+const LIGHT: [u8; 4] = [170, 170, 170, 150];
+const GREY: [u8; 4] = [110, 110, 110, 255];
+const DARK_BLUE: [u8; 4] = [40, 90, 200, 255];
+const CURRENT: [u8; 4] = [240, 170, 40, 255];
+const RED: [u8; 4] = [220, 50, 50, 255];
+const AXIS: [u8; 4] = [200, 200, 200, 255];
+
+/// What a genealogy recording shows besides [`GenealogyData`].
+#[derive(Debug, Clone, Copy)]
+pub struct GenealogyExtras<'a> {
+    /// The engine's genealogy (for the ancestral lines of every step).
+    pub genealogy: &'a Genealogy,
+    /// `weights[k][i] = W_k^i`, normalised.
+    pub weights: &'a [Vec<f64>],
+    /// Effective sample size of every step.
+    pub ess: &'a [f64],
+}
+
+/// The picture's coordinates: `(k, −c·ξ)`.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    c: f64,
+}
+
+impl Frame {
+    fn new(data: &GenealogyData) -> Self {
+        let (lo, hi) = data
+            .positions
+            .iter()
+            .flatten()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            });
+        let span = (hi - lo).max(1e-9);
+        let width = (data.n_steps().max(2) - 1) as f64;
+        Frame {
+            c: 0.4 * width / span,
+        }
+    }
+
+    fn at(&self, k: usize, x: f64) -> [f32; 2] {
+        [k as f32, (-self.c * x) as f32]
+    }
+}
+
+/// Write the genealogy recording to `path` (atomically).
+///
+/// # Errors
+/// Inconsistent data, or a Rerun or I/O error naming `path`.
+pub fn save(path: &Path, data: &GenealogyData, extras: &GenealogyExtras<'_>) -> Result<()> {
+    data.validate()?;
+    let (steps, n) = (data.n_steps(), data.n_particles());
+    if extras.genealogy.n_steps() != steps
+        || extras.genealogy.n_particles() != n
+        || extras.weights.len() != steps
+        || extras.ess.len() != steps
+        || extras.weights.iter().any(|w| w.len() != n)
+    {
+        return Err(VizError::PlotData {
+            what: "genealogy recording",
+            message: format!(
+                "shapes disagree: {steps}×{n} positions, genealogy {}×{}, {} weight rows, {} ESS values",
+                extras.genealogy.n_steps(),
+                extras.genealogy.n_particles(),
+                extras.weights.len(),
+                extras.ess.len()
+            ),
+        });
+    }
+    save_rrd(path, "pf-viz: particle genealogy", |rec, path| {
+        log(rec, path, data, extras)
+    })
+}
+
+fn log(
+    rec: &RecordingStream,
+    path: &Path,
+    data: &GenealogyData,
+    extras: &GenealogyExtras<'_>,
+) -> Result<()> {
+    let err = rrd_err(path);
+    let frame = Frame::new(data);
+    let (steps, n) = (data.n_steps(), data.n_particles());
+
+    blueprint()
+        .send(rec, BlueprintActivation::default())
+        .map_err(&err)?;
+    log_axes(rec, data, frame).map_err(&err)?;
+    rec.log_static(
+        ESS,
+        &SeriesLines::new()
+            .with_names(["effective sample size"])
+            .with_colors([DARK_BLUE])
+            .with_widths([2.0]),
+    )
+    .map_err(&err)?;
+
+    let mut segments: Vec<[[f32; 2]; 2]> = Vec::with_capacity(n * steps);
+    let mut points: Vec<[f32; 2]> = Vec::with_capacity(n * steps);
+    for k in 0..steps {
+        rec.set_time_sequence(STEP, k as i64);
+        if k > 0 {
+            for i in 0..n {
+                let a = data.ancestors[k][i];
+                segments.push([
+                    frame.at(k - 1, data.positions[k - 1][a]),
+                    frame.at(k, data.positions[k][i]),
+                ]);
+            }
+            rec.log(
+                format!("{ROOT}/all"),
+                &LineStrips2D::new(segments.iter().map(|s| s.to_vec()))
+                    .with_colors([LIGHT])
+                    .with_radii([Radius::new_ui_points(0.5)])
+                    .with_draw_order(10.0),
+            )
+            .map_err(&err)?;
+        }
+        points.extend(data.positions[k].iter().map(|&x| frame.at(k, x)));
+        rec.log(
+            format!("{ROOT}/particles"),
+            &Points2D::new(points.iter().copied())
+                .with_colors([GREY])
+                .with_radii([Radius::new_ui_points(1.5)])
+                .with_draw_order(20.0),
+        )
+        .map_err(&err)?;
+        // Area ∝ weight: radius ∝ √(N·W), so equal weights give the base size.
+        let radii = extras.weights[k]
+            .iter()
+            .map(|&w| Radius::new_ui_points((2.5 * (n as f64 * w).sqrt()).clamp(1.0, 12.0) as f32));
+        rec.log(
+            format!("{ROOT}/current"),
+            &Points2D::new(data.positions[k].iter().map(|&x| frame.at(k, x)))
+                .with_colors([CURRENT])
+                .with_radii(radii)
+                .with_draw_order(40.0),
+        )
+        .map_err(&err)?;
+        for i in 0..n {
+            let line = extras
+                .genealogy
+                .lineage_at(k, i)
+                .map_err(VizError::core("rrd genealogy"))?;
+            let strip: Vec<[f32; 2]> = line
+                .iter()
+                .enumerate()
+                .map(|(j, &idx)| frame.at(j, data.positions[j][idx]))
+                .collect();
+            rec.log(
+                format!("{ROOT}/lineage_{i}"),
+                &LineStrips2D::new([strip])
+                    .with_colors([DARK_BLUE])
+                    .with_radii([Radius::new_ui_points(1.5)])
+                    .with_draw_order(30.0),
+            )
+            .map_err(&err)?;
+        }
+        rec.log(ESS, &Scalars::single(extras.ess[k]))
+            .map_err(&err)?;
+    }
+    if let Some(t) = data.coalescence_time {
+        let (lo, hi) = y_extent(data, frame);
+        rec.log(
+            format!("{ROOT}/coalescence"),
+            &LineStrips2D::new([[[t as f32, lo], [t as f32, hi]]])
+                .with_colors([RED])
+                .with_radii([Radius::new_ui_points(2.0)])
+                .with_labels([format!("coalescence τ = {t}")])
+                .with_draw_order(50.0),
+        )
+        .map_err(&err)?;
+    }
+    Ok(())
+}
+
+/// Lowest and highest picture y, padded a little.
+fn y_extent(data: &GenealogyData, frame: Frame) -> (f32, f32) {
+    let ys = data.positions.iter().flatten().map(|&x| frame.at(0, x)[1]);
+    let (lo, hi) = ys.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), y| {
+        (lo.min(y), hi.max(y))
+    });
+    let pad = 0.04 * (hi - lo).max(1e-6);
+    (lo - pad, hi + pad)
+}
+
+/// Static axes: a frame, ticks every ~10 % in `k`, and ticks at round values of `ξ`.
+fn log_axes(
+    rec: &RecordingStream,
+    data: &GenealogyData,
+    frame: Frame,
+) -> rerun::RecordingStreamResult<()> {
+    let last = data.n_steps() - 1;
+    let (top, bottom) = y_extent(data, frame);
+    let left = -0.02 * last.max(1) as f32;
+    let right = last as f32;
+    rec.log_static(
+        format!("{ROOT}/axes/frame"),
+        &LineStrips2D::new([vec![[left, top], [left, bottom], [right, bottom]]])
+            .with_colors([AXIS])
+            .with_radii([Radius::new_ui_points(0.75)])
+            .with_draw_order(1.0),
+    )?;
+    let k_step = nice_step(last as f64 / 8.0).max(1.0) as usize;
+    let k_ticks: Vec<usize> = (0..=last).step_by(k_step).collect();
+    let tick_len = 0.015 * (bottom - top);
+    rec.log_static(
+        format!("{ROOT}/axes/k"),
+        &Points2D::new(k_ticks.iter().map(|&k| [k as f32, bottom + 2.0 * tick_len]))
+            .with_labels(k_ticks.iter().map(|k| format!("k = {k}")))
+            .with_colors([AXIS])
+            .with_radii([Radius::new_ui_points(2.0)])
+            .with_show_labels(true),
+    )?;
+    let (x_lo, x_hi) = data
+        .positions
+        .iter()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+            (lo.min(x), hi.max(x))
+        });
+    let x_step = nice_step((x_hi - x_lo) / 5.0);
+    let first = (x_lo / x_step).ceil() as i64;
+    let last_tick = (x_hi / x_step).floor() as i64;
+    let x_ticks: Vec<f64> = (first..=last_tick).map(|j| j as f64 * x_step).collect();
+    rec.log_static(
+        format!("{ROOT}/axes/xi"),
+        &Points2D::new(x_ticks.iter().map(|&x| [left, frame.at(0, x)[1]]))
+            .with_labels(x_ticks.iter().map(|x| format!("ξ = {}", fmt_tick(*x))))
+            .with_colors([AXIS])
+            .with_radii([Radius::new_ui_points(2.0)])
+            .with_show_labels(true),
+    )?;
+    // Faint horizontal grid lines at the ξ ticks.
+    rec.log_static(
+        format!("{ROOT}/axes/grid"),
+        &LineStrips2D::new(x_ticks.iter().map(|&x| {
+            let y = frame.at(0, x)[1];
+            vec![[left, y], [right, y]]
+        }))
+        .with_colors([[200, 200, 200, 60]])
+        .with_radii([Radius::new_ui_points(0.5)])
+        .with_draw_order(2.0),
+    )?;
+    Ok(())
+}
+
+/// 1, 2 or 5 times a power of ten, at least `raw`.
+fn nice_step(raw: f64) -> f64 {
+    if !(raw > 0.0 && raw.is_finite()) {
+        return 1.0;
+    }
+    let p = 10f64.powf(raw.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * p)
+        .find(|&s| s >= raw)
+        .unwrap_or(10.0 * p)
+}
+
+fn fmt_tick(x: f64) -> String {
+    let s = format!("{x:.2}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.into() }
+}
+
+/// The layout the viewer opens on: the genealogy above, the ESS trace below.
+fn blueprint() -> Blueprint {
+    Blueprint::new(
+        Vertical::new([
+            Spatial2DView::new("particle genealogy (x: step k, y: position ξ, ticks labelled)")
+                .with_origin(ROOT)
+                .into(),
+            TimeSeriesView::new("effective sample size")
+                .with_origin(ESS)
+                .into(),
+        ])
+        .with_row_shares([3.0, 1.0]),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nice_steps() {
+        assert_eq!(nice_step(12.5), 20.0);
+        assert_eq!(nice_step(0.7), 1.0);
+        assert_eq!(nice_step(0.3), 0.5);
+        assert_eq!(nice_step(0.0), 1.0);
+        assert_eq!(fmt_tick(-0.0), "0");
+        assert_eq!(fmt_tick(1.5), "1.5");
+    }
+}
