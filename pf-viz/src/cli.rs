@@ -19,6 +19,42 @@ pub struct Cli {
 pub enum Command {
     /// Run every report section and write its figures, recordings and summary.json.
     Report(ReportArgs),
+    /// Measure the speed of the engine on this machine.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+/// `pf-viz bench …`.
+#[derive(Debug, Subcommand)]
+pub enum BenchCommand {
+    /// The AR(1)+noise bootstrap filter (φ=0.98, σ=0.2, ρ=1), resampling at every step.
+    Bootstrap(BenchBootstrapArgs),
+}
+
+/// Arguments of `pf-viz bench bootstrap`.
+#[derive(Debug, Clone, Args)]
+pub struct BenchBootstrapArgs {
+    /// CSV file with a `y` column holding Y_0…Y_n; without it, n observations are simulated.
+    #[arg(long, value_name = "FILE.csv")]
+    pub data: Option<PathBuf>,
+    /// Number of particles N.
+    #[arg(long, value_name = "N", default_value_t = 100_000)]
+    pub particles: usize,
+    /// Number of steps n after Y_0 (default 500, or all the data).
+    #[arg(long, value_name = "n")]
+    pub steps: Option<usize>,
+    /// Worker threads within each step.
+    #[arg(long, value_name = "T", default_value_t = 1)]
+    pub threads: usize,
+    /// Resampling scheme.
+    #[arg(long, default_value = "systematic")]
+    pub resampler: pf_core::resample::Resampler,
+    /// Seed of the simulated data and of the filter's streams.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `pf-viz report`.
@@ -83,7 +119,9 @@ mod tests {
     #[test]
     fn report_defaults() {
         let cli = Cli::try_parse_from(["pf-viz", "report", "--out", "x"]).unwrap();
-        let Command::Report(a) = cli.command;
+        let Command::Report(a) = cli.command else {
+            panic!("parsed as another subcommand")
+        };
         assert_eq!(a.seed, 1);
         assert!(!a.no_rrd);
         assert!(Cli::try_parse_from(["pf-viz", "report"]).is_err());

@@ -12,6 +12,22 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum VizError {
+    /// A data file is missing or malformed; `line` is 1-based, counting the header.
+    #[error("{}{}: {message}", path.display(), line.map(|l| format!(", line {l}")).unwrap_or_default())]
+    Data {
+        /// The file.
+        path: PathBuf,
+        /// The line at fault, when known.
+        line: Option<u64>,
+        /// What is wrong.
+        message: String,
+    },
+    /// A command-line value is out of range (clap checks the syntax, this the meaning).
+    #[error("{message}")]
+    Argument {
+        /// What is wrong.
+        message: String,
+    },
     /// The engine rejected a configuration or failed during a run.
     #[error("{section}: {source}")]
     Core {

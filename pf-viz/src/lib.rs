@@ -8,13 +8,17 @@
 //! | module | holds |
 //! |---|---|
 //! | [`cli`] | the clap command line |
+//! | [`bench`] | `pf-viz bench bootstrap` |
+//! | [`data`] | reading observation CSV files |
 //! | [`report`] | `pf-viz report`: the registry of sections, one file per paper |
 //! | [`png`] | plot kinds, each a function from plain data to a PNG |
 //! | `rrd` | Rerun loggers (feature `rrd`) |
 //! | [`io`] | atomic file writes |
 //! | [`error`] | [`VizError`], printed by the binary as one line |
 
+pub mod bench;
 pub mod cli;
+pub mod data;
 pub mod error;
 pub mod io;
 pub mod png;
@@ -24,7 +28,7 @@ pub mod rrd;
 
 pub use error::{Result, VizError};
 
-use cli::{Cli, Command};
+use cli::{BenchCommand, Cli, Command};
 
 /// Execute a parsed command line.
 ///
@@ -39,6 +43,21 @@ pub fn run(cli: Cli) -> Result<()> {
                 summary.sections.len(),
                 args.out.display()
             );
+            Ok(())
+        }
+        Command::Bench(BenchCommand::Bootstrap(args)) => {
+            let r = bench::bootstrap(&args)?;
+            if args.json {
+                let json = serde_json::to_string(&r).map_err(|e| VizError::Argument {
+                    message: format!("cannot serialise the result: {e}"),
+                })?;
+                println!("{json}");
+            } else {
+                println!(
+                    "bootstrap AR(1): N = {}, n = {}, {} thread(s): {:.3} s, {:.2} ns per particle-step, log-likelihood {:.3}",
+                    r.particles, r.steps, r.threads, r.seconds, r.ns_per_particle_step, r.loglik
+                );
+            }
             Ok(())
         }
     }
