@@ -199,11 +199,13 @@ impl SuffStats {
     /// # Errors
     /// A vector that is not of length 4.
     pub fn from_slice(n: usize, v: &[f64]) -> Result<Self> {
-        let tau: [f64; 4] = v.try_into().map_err(|_| pf_core::CoreError::DimensionMismatch {
-            what: "AR(1) statistics",
-            expected: 4,
-            got: v.len(),
-        })?;
+        let tau: [f64; 4] = v
+            .try_into()
+            .map_err(|_| pf_core::CoreError::DimensionMismatch {
+                what: "AR(1) statistics",
+                expected: 4,
+                got: v.len(),
+            })?;
         Ok(SuffStats { n, tau })
     }
 
@@ -246,7 +248,8 @@ impl SuffStats {
         let Theta { phi, sigma2, rho2 } = *theta;
         Theta {
             phi: (t2 - phi * t1) / sigma2,
-            sigma2: -n / (2.0 * sigma2) + (t3 - 2.0 * phi * t2 + phi * phi * t1) / (2.0 * sigma2 * sigma2),
+            sigma2: -n / (2.0 * sigma2)
+                + (t3 - 2.0 * phi * t2 + phi * phi * t1) / (2.0 * sigma2 * sigma2),
             rho2: -(n + 1.0) / (2.0 * rho2) + t4 / (2.0 * rho2 * rho2),
         }
     }

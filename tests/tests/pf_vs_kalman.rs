@@ -94,8 +94,15 @@ fn likelihood_estimate_is_unbiased_and_filter_means_match_the_kalman_filter() {
 fn every_resampler_and_policy_gives_an_unbiased_likelihood() {
     let (phi, sigma, rho) = (0.9, 0.5, 1.0);
     let ar1 = NoisyAr1::new(phi, sigma, rho).unwrap();
-    let twin = LinearGaussian::scalar(phi, 1.0, sigma * sigma, rho * rho, ar1.m0(), ar1.s0() * ar1.s0())
-        .unwrap();
+    let twin = LinearGaussian::scalar(
+        phi,
+        1.0,
+        sigma * sigma,
+        rho * rho,
+        ar1.m0(),
+        ar1.s0() * ar1.s0(),
+    )
+    .unwrap();
     let (_, ys) = ar1.simulate(40, &mut stream_rng(7, 0));
     let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
     let yv: Vec<Option<DVector<f64>>> = ys
@@ -136,8 +143,15 @@ fn every_resampler_and_policy_gives_an_unbiased_likelihood() {
 fn batch_filter_likelihood_is_unbiased() {
     let (phi, sigma, rho) = (0.9, 0.5, 1.0);
     let ar1 = NoisyAr1::new(phi, sigma, rho).unwrap();
-    let twin = LinearGaussian::scalar(phi, 1.0, sigma * sigma, rho * rho, ar1.m0(), ar1.s0() * ar1.s0())
-        .unwrap();
+    let twin = LinearGaussian::scalar(
+        phi,
+        1.0,
+        sigma * sigma,
+        rho * rho,
+        ar1.m0(),
+        ar1.s0() * ar1.s0(),
+    )
+    .unwrap();
     let (_, ys) = ar1.simulate(40, &mut stream_rng(8, 0));
     let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
     let yv: Vec<Option<DVector<f64>>> = ys

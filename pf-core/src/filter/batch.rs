@@ -66,6 +66,18 @@ impl BatchConfig {
     }
 }
 
+/// One chunk's share of a step: its states, log-weights, stream and (max, first NaN).
+type ChunkWork<'a> = (
+    usize,
+    (
+        (&'a mut [f64], &'a mut [f64]),
+        (&'a mut ChunkRng, &'a mut (f64, Option<usize>)),
+    ),
+);
+
+/// One chunk's cumulative weights, its log-weights and its (sum, sum of squares).
+type AccumulateWork<'a> = ((&'a mut [f64], &'a [f64]), &'a mut (f64, f64));
+
 /// A random stream on its own cache line, so that two threads never share one.
 #[derive(Clone)]
 #[repr(align(64))]
@@ -199,13 +211,7 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         let model = &self.model;
         let (x_old, lw_old, ancestors) = (&self.x, &self.lw, &self.ancestors);
         let first = t == 0;
-        let work = |(d, ((xs, lws), (rng, mx))): (
-            usize,
-            (
-                (&mut [f64], &mut [f64]),
-                (&mut ChunkRng, &mut (f64, Option<usize>)),
-            ),
-        )| {
+        let work = |(d, ((xs, lws), (rng, mx))): ChunkWork<'_>| {
             let base = d * c;
             let mut m = f64::NEG_INFINITY;
             let mut nan = None;
@@ -261,7 +267,7 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         if max == f64::NEG_INFINITY {
             return Err(CoreError::AllWeightsZero { t });
         }
-        let accumulate = |((cws, lws), s): ((&mut [f64], &[f64]), &mut (f64, f64))| {
+        let accumulate = |((cws, lws), s): AccumulateWork<'_>| {
             let mut acc = 0.0;
             let mut sq = 0.0;
             for (cw, &l) in cws.iter_mut().zip(lws) {

@@ -61,7 +61,7 @@ mod tests {
     #[test]
     fn ceil_matches_std() {
         for &x in &[-0.999, -0.5, 0.0, 0.2, 1.0, 1.000_000_1, 41.5, 1e6] {
-            assert_eq!(ceil_to_usize(x), (x as f64).ceil().max(0.0) as usize, "{x}");
+            assert_eq!(ceil_to_usize(x), x.ceil().max(0.0) as usize, "{x}");
         }
     }
 

@@ -100,7 +100,7 @@ impl LinePlot {
             }
         }
         if let Some((lo, hi)) = self.y_range
-            && !(lo < hi)
+            && (lo >= hi || lo.is_nan() || hi.is_nan())
         {
             return bad(format!("empty y range {lo}..{hi}"));
         }

@@ -1,0 +1,52 @@
+//! One plain function per figure of Section V (and one beyond the paper): config struct in,
+//! result struct of raw numbers out. Each is deterministic for its seed: the cycle is
+//! simulated from `seed`, and filter run `r` uses [`pf_core::mc::stream_rng`]`(seed + 1, r)`.
+//!
+//! | function | paper |
+//! |---|---|
+//! | [`cycle`] | Figs. 3–4: inputs, loading phases |
+//! | [`fig5_6`] | Figs. 5–6: simulated against estimated `Q_o`, `ρ_o` in phase 3; residual histograms |
+//! | [`fig7`] | Fig. 7: PF against the direct computation (15)–(16) |
+//! | [`fig8`] | Fig. 8: min–max band and mean of 25 runs on the same data |
+//! | [`n_sweep`] | beyond the paper: residual std against `N` |
+
+mod cycle;
+mod fig5_6;
+mod fig7;
+mod fig8;
+mod n_sweep;
+
+pub use cycle::{CycleConfig, cycle};
+pub use fig5_6::{Fig56Config, Fig56Result, Histogram, PaperResiduals, ResidualReport, fig5_6};
+pub use fig7::{Fig7Config, Fig7Result, fig7};
+pub use fig8::{Band, Fig8Config, Fig8Result, fig8};
+pub use n_sweep::{NSweepConfig, NSweepResult, NSweepRow, n_sweep};
+
+use serde::{Deserialize, Serialize};
+
+/// How big an experiment is: `Quick` runs in seconds, `Default` in about a minute or less,
+/// `Full` at the paper's sizes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Scale {
+    /// Seconds: few particles and runs, for tests and smoke checks.
+    Quick,
+    /// About a minute or less.
+    #[default]
+    Default,
+    /// The paper's sizes (and the whole `N` range of the sweep).
+    Full,
+}
+
+/// The stream seed of filter runs, kept apart from the simulation's streams.
+pub(crate) fn filter_seed(seed: u64) -> u64 {
+    seed.wrapping_add(0x5eed_f117)
+}
+
+/// Indices of phase-3 samples of a cycle.
+pub(crate) fn phase3(c: &crate::simulator::Cycle) -> crate::Result<std::ops::Range<usize>> {
+    let start = c
+        .phase3_start
+        .ok_or(crate::DredgeError::PhaseNotReached { phase: 3 })?;
+    Ok(start..c.len())
+}

@@ -1,0 +1,203 @@
+//! Data association (EPF step 1): gating by validation ellipsoids, then energy
+//! minimisation, or the nearest-neighbour standard filter (NNSF) as the baseline.
+//!
+//! - **Gate.** Detection `y_j` is validated for target `k` when it lies in the ellipsoid
+//!   around the prediction `Â(t)` holding probability `P_G` of `N(Â(t), Σ̂_k)`:
+//!   `(y_j − Â(t))ᵀ Σ̂_k⁻¹ (y_j − Â(t)) ≤ γ`, `γ = −2 ln(1 − P_G)` (the χ²₂ quantile). Its
+//!   axes are the eigenvectors of `Σ̂_k`, its semi-axes `√(γλ)` (see
+//!   [`pf_core::gaussian::error_ellipse`]). A detection outside every gate is clutter.
+//! - **Energy, global** ([`Association::Energy`]). The abstract's "global minimization of
+//!   an energy": each target takes at most one detection and each detection at most one
+//!   target, minimising `Σ E(k, y_j)` over gated pairs plus [`MISS_COST`] per target left
+//!   without one (Hungarian method).
+//! - **Energy, per measurement** ([`Association::EnergyPerMeasurement`]). Eq. (1) read
+//!   literally: `y_j → argmin_k E(k, y_j)` over the targets whose gate holds it; a target
+//!   given several keeps the one of least energy.
+//! - **NNSF** ([`Association::Nearest`]). Each target takes the validated detection nearest
+//!   (Mahalanobis) to the point E¹ measures from; two targets may take the same detection
+//!   (Li & Bar-Shalom 1996).
+
+use crate::assignment::Hungarian;
+use crate::energy::{EnergyConfig, EnergyMatrix, TargetGeometry};
+use crate::error::{EpfError, Result};
+use crate::geometry::Vec2;
+use serde::{Deserialize, Serialize};
+
+/// Cost of leaving a target without a detection in the global assignment. Every energy is
+/// at most 1, so 2 makes one more assigned pair worth more than any reshuffle of one pair.
+pub const MISS_COST: f64 = 2.0;
+
+/// A cost that forbids a pair (outside the gate). Finite so the Hungarian arithmetic stays
+/// exact; larger than any sum of real costs.
+const FORBIDDEN: f64 = 1e9;
+
+/// How detections are associated with targets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Association {
+    /// Global energy minimisation (optimal assignment on the E matrix).
+    #[default]
+    #[serde(rename = "energy")]
+    Energy,
+    /// The per-measurement argmin of eq. (1).
+    #[serde(rename = "energy_per_measurement")]
+    EnergyPerMeasurement,
+    /// The nearest-neighbour standard filter.
+    #[serde(rename = "nn")]
+    Nearest,
+}
+
+impl Association {
+    /// The name used in configs and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Association::Energy => "energy",
+            Association::EnergyPerMeasurement => "energy_per_measurement",
+            Association::Nearest => "nn",
+        }
+    }
+}
+
+impl std::str::FromStr for Association {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        [
+            Association::Energy,
+            Association::EnergyPerMeasurement,
+            Association::Nearest,
+        ]
+        .into_iter()
+        .find(|a| a.name() == s)
+        .ok_or_else(|| {
+            format!("unknown association '{s}' (expected energy, energy_per_measurement or nn)")
+        })
+    }
+}
+
+/// `γ = −2 ln(1 − P_G)`: the squared Mahalanobis radius of the gate of probability `P_G`.
+///
+/// # Errors
+/// [`EpfError::InvalidParameter`] unless `0 < P_G < 1`.
+pub fn gate_threshold(p_g: f64) -> Result<f64> {
+    if !(p_g > 0.0 && p_g < 1.0) {
+        return Err(EpfError::InvalidParameter {
+            name: "P_G",
+            value: p_g,
+            reason: "the gate probability must lie in (0, 1)",
+        });
+    }
+    Ok(-2.0 * (-p_g).ln_1p())
+}
+
+/// Association buffers, reused from frame to frame.
+#[derive(Debug, Clone, Default)]
+pub struct Associator {
+    energy: EnergyMatrix,
+    gated: Vec<bool>,
+    cost: Vec<f64>,
+    cols: Vec<usize>,
+    hungarian: Hungarian,
+}
+
+impl Associator {
+    /// Empty buffers.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The energies of the last [`associate`](Self::associate) call with an energy method.
+    pub fn energy(&self) -> &EnergyMatrix {
+        &self.energy
+    }
+
+    /// Whether detection `j` fell in target `k`'s gate in the last call.
+    pub fn is_gated(&self, k: usize, j: usize, m: usize) -> bool {
+        self.gated[k * m + j]
+    }
+
+    /// Associate `ys` with `targets`: `out[k]` becomes the index of target `k`'s detection,
+    /// or `None`. `gamma` is the gate's squared Mahalanobis radius ([`gate_threshold`]).
+    pub fn associate(
+        &mut self,
+        targets: &[TargetGeometry],
+        ys: &[Vec2],
+        gamma: f64,
+        method: Association,
+        cfg: &EnergyConfig,
+        out: &mut [Option<usize>],
+    ) {
+        let (k, m) = (targets.len(), ys.len());
+        self.gated.clear();
+        for g in targets {
+            for y in ys {
+                self.gated.push(g.mahalanobis_sq(&g.a_t, y) <= gamma);
+            }
+        }
+        out.fill(None);
+        if method != Association::Nearest {
+            self.energy.compute(targets, ys, cfg);
+        }
+        match method {
+            Association::Nearest => {
+                for (i, g) in targets.iter().enumerate() {
+                    let c = g.e1_centre(cfg.e1_reference);
+                    let mut best = f64::INFINITY;
+                    for (j, y) in ys.iter().enumerate() {
+                        let d = g.mahalanobis_sq(&c, y);
+                        if self.gated[i * m + j] && d < best {
+                            best = d;
+                            out[i] = Some(j);
+                        }
+                    }
+                }
+            }
+            Association::EnergyPerMeasurement => {
+                let mut best = [f64::INFINITY; 1];
+                for j in 0..m {
+                    let mut arg = None;
+                    best[0] = f64::INFINITY;
+                    for i in 0..k {
+                        let e = self.energy.magnitude(i, j);
+                        if self.gated[i * m + j] && e < best[0] {
+                            best[0] = e;
+                            arg = Some(i);
+                        }
+                    }
+                    if let Some(i) = arg {
+                        let keep = out[i].is_none_or(|jj| self.energy.magnitude(i, jj) > best[0]);
+                        if keep {
+                            out[i] = Some(j);
+                        }
+                    }
+                }
+            }
+            Association::Energy => {
+                // Columns: the M detections, then one "missed" column per target.
+                let w = m + k;
+                self.cost.clear();
+                self.cost.resize(k * w, FORBIDDEN);
+                for i in 0..k {
+                    for j in 0..m {
+                        if self.gated[i * m + j] {
+                            self.cost[i * w + j] = self.energy.magnitude(i, j);
+                        }
+                    }
+                    self.cost[i * w + m + i] = MISS_COST;
+                }
+                self.cols.clear();
+                self.cols.resize(k, 0);
+                if self
+                    .hungarian
+                    .solve(k, w, &self.cost, &mut self.cols)
+                    .is_some()
+                {
+                    for i in 0..k {
+                        let j = self.cols[i];
+                        if j < m && self.gated[i * m + j] {
+                            out[i] = Some(j);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,294 @@
+//! The three energies of Section 2 and their normalised magnitude, eq. (1).
+//!
+//! For target `k` (the paper's A) and detection `y_j` at frame `t`:
+//! - `E¹(k, y_j) = √((y_j − Â)ᵀ Σ̂_k⁻¹ (y_j − Â))`, the Mahalanobis distance energy;
+//! - `E²(k, y_j) = |S₁ − S₂|`, the absolute accuracy evolution energy: `S₁` is the
+//!   intersection area of the circumcircles of `(Â(t−2), Â(t−1), Â(t))` and
+//!   `(Â(t−1), Â(t), Â₁(t+1))`, `S₂` that of `(Â(t−2), Â(t−1), y_j)` and
+//!   `(Â(t−1), y_j, Â₂(t+1))` (Fig. 1a–d);
+//! - `E³(k, y_j) = 1/S`, the proximity evolution energy: `S` is the intersection area of the
+//!   triangles `(Â(t−2), Â(t−1), y_j)` and `(Â(t−2), Â(t−1), Â(t))` (Fig. 1e);
+//! - `E(k, y_j) = (1/√3)·√(Σ_l α_l² E^l(k, y_j)²)`, `α_l = 1/Σ_{k=1}^K E^l(k, y_j)` (eq. (1)).
+//!
+//! ## Reading of E¹
+//! The paper says E¹ measures the distance to "the prediction of A at (t−1)". Read
+//! literally that is the estimate `Â(t−1)`; read as "the prediction made at t−1" it is the
+//! one-step prediction `Â(t)`. Only the second makes the paper's next sentence true ("if we
+//! only consider the linear translation in one direction, the data association problem is
+//! limited to the computation of the Mahalanobis distance energy"), so it is the default
+//! ([`E1Reference::Predicted`]); the literal reading is [`E1Reference::Previous`].
+//!
+//! ## Degenerate geometry (never NaN)
+//! - A circumcircle of collinear or coincident points, or of radius above
+//!   `radius_cap ×` its triangle's longest side, is a straight line ("a circle at
+//!   infinity"): it encloses no finite disc, and its intersection area with anything is 0.
+//!   So straight motion gives `S₁ = 0`, and a detection that keeps it straight `S₂ = 0`.
+//! - If the reference triangle `(Â(t−2), Â(t−1), Â(t))` is straight in that sense, the
+//!   motion has no side to compare with and `E³ = 0` ("most of time the third energy is
+//!   null … due to the presence of a linear displacement", Table 1).
+//! - Otherwise an empty triangle intersection would make `E³ = 1/0`; `S` is floored at
+//!   `e3_floor ×` the reference triangle's area, so `E³ ≤ 1/(e3_floor·area)`.
+//! - When `Σ_k E^l(k, y_j) = 0` no target is distinguished by component `l`; its weighted
+//!   terms `α_l E^l` are then 0 for every `k`.
+//!
+//! With these rules every `α_l E^l` lies in `[0, 1]`, so `E` lies in `[0, 1]` as the paper
+//! states under eq. (1).
+
+use crate::dynamics::SplineDynamics;
+use crate::error::{EpfError, Result};
+use crate::geometry::{
+    Circle, Vec2, circle_intersection_area, circumcircle, triangle_area, triangle_intersection_area,
+};
+use nalgebra::Matrix2;
+use serde::{Deserialize, Serialize};
+
+/// Which prediction E¹ (and the nearest-neighbour baseline) measures distance to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum E1Reference {
+    /// `Â(t)`, the prediction made at `t − 1` for `t` (default; see the module docs).
+    #[default]
+    Predicted,
+    /// `Â(t−1)`, the estimate at the previous frame (the literal wording).
+    Previous,
+}
+
+/// Choices the paper leaves open in the energies.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnergyConfig {
+    /// The point E¹ is measured from.
+    pub e1_reference: E1Reference,
+    /// A circumcircle whose radius exceeds this multiple of its triangle's longest side is a
+    /// straight line (turning by less than about `1/radius_cap` rad). Default 20 (≈ 3°).
+    pub radius_cap: f64,
+    /// Floor on the triangle intersection `S`, as a fraction of the reference triangle's
+    /// area, so that `E³ = 1/S` stays finite. Default 1e-3.
+    pub e3_floor: f64,
+}
+
+impl Default for EnergyConfig {
+    fn default() -> Self {
+        EnergyConfig {
+            e1_reference: E1Reference::Predicted,
+            radius_cap: 20.0,
+            e3_floor: 1e-3,
+        }
+    }
+}
+
+impl EnergyConfig {
+    /// Check that the configuration can run.
+    ///
+    /// # Errors
+    /// [`EpfError::InvalidParameter`] for a non-positive or non-finite cap or floor.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.radius_cap > 0.0 && self.radius_cap.is_finite()) {
+            return Err(EpfError::InvalidParameter {
+                name: "radius_cap",
+                value: self.radius_cap,
+                reason: "must be a positive finite multiple of the triangle's longest side",
+            });
+        }
+        if !(self.e3_floor > 0.0 && self.e3_floor <= 1.0) {
+            return Err(EpfError::InvalidParameter {
+                name: "e3_floor",
+                value: self.e3_floor,
+                reason: "must lie in (0, 1]",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// What the energies need to know about one target at frame `t` (Fig. 1 notation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TargetGeometry {
+    /// `Â(t−2)`.
+    pub a_tm2: Vec2,
+    /// `Â(t−1)`.
+    pub a_tm1: Vec2,
+    /// `Â(t)`, predicted by the not-updated dynamic model.
+    pub a_t: Vec2,
+    /// `Â₁(t+1)`, predicted by the not-updated dynamic model.
+    pub a1_tp1: Vec2,
+    /// `Σ̂_k⁻¹`, the inverse of the target's covariance.
+    pub cov_inv: Matrix2<f64>,
+    /// The not-updated dynamic model, updated per detection for `Â₂(t+1)`.
+    pub dynamics: SplineDynamics,
+    /// Frame `t`.
+    pub t: f64,
+    /// Frames from `t` to `t + 1` (the next observation), for `Â(t+1)`.
+    pub dt_next: f64,
+}
+
+impl TargetGeometry {
+    /// `Â₂(t+1)`: the prediction after `y` is associated at `t` and the model updated.
+    pub fn a2_tp1(&self, y: &Vec2) -> Vec2 {
+        y + self
+            .dynamics
+            .updated(self.t, *y)
+            .displacement(self.t, self.dt_next)
+    }
+
+    /// The point E¹ measures from.
+    pub fn e1_centre(&self, r: E1Reference) -> Vec2 {
+        match r {
+            E1Reference::Predicted => self.a_t,
+            E1Reference::Previous => self.a_tm1,
+        }
+    }
+
+    /// Squared Mahalanobis distance of `y` from `centre` under `Σ̂_k`.
+    pub fn mahalanobis_sq(&self, centre: &Vec2, y: &Vec2) -> f64 {
+        let r = y - centre;
+        (r.transpose() * self.cov_inv * r)[(0, 0)].max(0.0)
+    }
+}
+
+/// A circumcircle, or `None` when it is a straight line in the sense of the module docs.
+fn finite_circle(a: &Vec2, b: &Vec2, c: &Vec2, radius_cap: f64) -> Option<Circle> {
+    let longest = (a - b).norm().max((b - c).norm()).max((c - a).norm());
+    circumcircle(a, b, c).filter(|circ| circ.radius <= radius_cap * longest)
+}
+
+/// Intersection area of the circumcircles of two triangles (0 if either is a line).
+fn circles_area(t1: [&Vec2; 3], t2: [&Vec2; 3], cap: f64) -> f64 {
+    match (
+        finite_circle(t1[0], t1[1], t1[2], cap),
+        finite_circle(t2[0], t2[1], t2[2], cap),
+    ) {
+        (Some(c1), Some(c2)) => circle_intersection_area(&c1, &c2),
+        _ => 0.0,
+    }
+}
+
+/// The raw components `[E¹, E², E³]` for target `g` and detection `y`.
+pub fn components(g: &TargetGeometry, y: &Vec2, cfg: &EnergyConfig) -> [f64; 3] {
+    let e1 = g.mahalanobis_sq(&g.e1_centre(cfg.e1_reference), y).sqrt();
+    let s1 = circles_area(
+        [&g.a_tm2, &g.a_tm1, &g.a_t],
+        [&g.a_tm1, &g.a_t, &g.a1_tp1],
+        cfg.radius_cap,
+    );
+    let a2 = g.a2_tp1(y);
+    let s2 = circles_area([&g.a_tm2, &g.a_tm1, y], [&g.a_tm1, y, &a2], cfg.radius_cap);
+    let e2 = (s1 - s2).abs();
+    let e3 = if finite_circle(&g.a_tm2, &g.a_tm1, &g.a_t, cfg.radius_cap).is_none() {
+        0.0
+    } else {
+        let area_ref = triangle_area(&g.a_tm2, &g.a_tm1, &g.a_t);
+        let s = triangle_intersection_area(&[g.a_tm2, g.a_tm1, *y], &[g.a_tm2, g.a_tm1, g.a_t]);
+        1.0 / s.max(cfg.e3_floor * area_ref)
+    };
+    [e1, e2, e3].map(|e| if e.is_finite() { e } else { f64::MAX })
+}
+
+/// The K × M energies of every target against every detection of one frame: raw
+/// components, their normalised values `α_l E^l` and the magnitude `E` of eq. (1).
+/// Row-major (`k·M + j`); buffers are reused from frame to frame.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct EnergyMatrix {
+    k: usize,
+    m: usize,
+    raw: Vec<[f64; 3]>,
+    weighted: Vec<[f64; 3]>,
+    e: Vec<f64>,
+}
+
+impl EnergyMatrix {
+    /// An empty matrix.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Fill the matrix for `targets` × `ys`.
+    pub fn compute(&mut self, targets: &[TargetGeometry], ys: &[Vec2], cfg: &EnergyConfig) {
+        let (k, m) = (targets.len(), ys.len());
+        self.k = k;
+        self.m = m;
+        self.raw.clear();
+        for g in targets {
+            for y in ys {
+                self.raw.push(components(g, y, cfg));
+            }
+        }
+        self.weighted.clear();
+        self.weighted.resize(k * m, [0.0; 3]);
+        self.e.clear();
+        self.e.resize(k * m, 0.0);
+        for j in 0..m {
+            for l in 0..3 {
+                // α_l = 1 / Σ_k E^l(k, y_j).
+                let sum: f64 = (0..k).map(|i| self.raw[i * m + j][l]).sum();
+                for i in 0..k {
+                    let x = self.raw[i * m + j][l];
+                    self.weighted[i * m + j][l] = if sum > 0.0 && sum.is_finite() {
+                        (x / sum).clamp(0.0, 1.0)
+                    } else {
+                        0.0
+                    };
+                }
+            }
+            for i in 0..k {
+                let w = self.weighted[i * m + j];
+                self.e[i * m + j] = ((w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) / 3.0).sqrt();
+            }
+        }
+    }
+
+    /// Number of targets `K`.
+    pub fn n_targets(&self) -> usize {
+        self.k
+    }
+
+    /// Number of detections `M`.
+    pub fn n_detections(&self) -> usize {
+        self.m
+    }
+
+    /// `[E¹, E², E³](k, y_j)`.
+    pub fn raw(&self, k: usize, j: usize) -> [f64; 3] {
+        self.raw[k * self.m + j]
+    }
+
+    /// `[α₁E¹, α₂E², α₃E³](k, y_j)`.
+    pub fn weighted(&self, k: usize, j: usize) -> [f64; 3] {
+        self.weighted[k * self.m + j]
+    }
+
+    /// `E(k, y_j)`, eq. (1).
+    pub fn magnitude(&self, k: usize, j: usize) -> f64 {
+        self.e[k * self.m + j]
+    }
+
+    /// All magnitudes, row-major.
+    pub fn magnitudes(&self) -> &[f64] {
+        &self.e
+    }
+
+    /// Component `l` (0-based) of the weighted energies as K rows of M values; `l = 3`
+    /// gives `E`.
+    pub fn rows(&self, l: usize) -> Vec<Vec<f64>> {
+        (0..self.k)
+            .map(|i| {
+                (0..self.m)
+                    .map(|j| {
+                        if l < 3 {
+                            self.weighted(i, j)[l]
+                        } else {
+                            self.magnitude(i, j)
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Component `l` (0-based) of the raw energies as K rows of M values.
+    pub fn raw_rows(&self, l: usize) -> Vec<Vec<f64>> {
+        (0..self.k)
+            .map(|i| (0..self.m).map(|j| self.raw(i, j)[l]).collect())
+            .collect()
+    }
+}

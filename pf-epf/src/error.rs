@@ -1,0 +1,85 @@
+//! The crate's error type: every variant says what was wrong and where.
+
+use pf_core::CoreError;
+use thiserror::Error;
+
+/// Errors of pf-epf. Input errors name the row, target or frame at fault.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum EpfError {
+    /// An engine error (filter degeneracy, bad filter configuration, metric input).
+    #[error(transparent)]
+    Core(#[from] CoreError),
+    /// A configuration parameter is outside its valid range.
+    #[error("invalid parameter {name} = {value}: {reason}")]
+    InvalidParameter {
+        /// Parameter name, as the paper writes it where possible.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What the valid range is.
+        reason: &'static str,
+    },
+    /// A detection or init row holds a NaN or infinite coordinate.
+    #[error("non-finite {what} {value} in {file} row {row}")]
+    NonFiniteData {
+        /// `"detections"` or `"init"`.
+        file: &'static str,
+        /// Row index (0-based, header excluded).
+        row: usize,
+        /// Which column.
+        what: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// Frames must not decrease from one row to the next.
+    #[error("frame goes backwards in {file} row {row}: {frame} after {previous}")]
+    FrameBackwards {
+        /// `"detections"` or `"init"`.
+        file: &'static str,
+        /// Row index (0-based, header excluded).
+        row: usize,
+        /// The frame of this row.
+        frame: i64,
+        /// The frame of the row before.
+        previous: i64,
+    },
+    /// A target's init has fewer than the two frames the energies need.
+    #[error("target {target} has {frames} init frame(s); the energies need at least 2")]
+    TooFewInitFrames {
+        /// Target id.
+        target: i64,
+        /// Number of distinct init frames given.
+        frames: usize,
+    },
+    /// A target has two init rows for the same frame.
+    #[error("target {target} has two init rows for frame {frame}")]
+    DuplicateInitFrame {
+        /// Target id.
+        target: i64,
+        /// The repeated frame.
+        frame: i64,
+    },
+    /// The init file has no target at all.
+    #[error("the init data hold no target")]
+    NoTargets,
+    /// A frame was asked for that the detections do not have after the init frames.
+    #[error("frame {frame} is not a tracked frame (tracked frames: {first}..={last})")]
+    UnknownFrame {
+        /// The requested frame.
+        frame: i64,
+        /// First tracked frame (or 0 when none).
+        first: i64,
+        /// Last tracked frame (or 0 when none).
+        last: i64,
+    },
+    /// No detection lies after the init frames, so there is nothing to track.
+    #[error("no detection lies after the last init frame {last_init}")]
+    NothingToTrack {
+        /// The last init frame over all targets.
+        last_init: i64,
+    },
+}
+
+/// Result alias for pf-epf.
+pub type Result<T, E = EpfError> = std::result::Result<T, E>;

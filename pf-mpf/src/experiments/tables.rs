@@ -1,0 +1,329 @@
+//! Tables II (constant time) and III (constant velocity RMSE), Section IV-B/C.
+//!
+//! Every partition sees the same true trajectory and, in Monte Carlo run `r`, the same
+//! measurement noise (stream `(seed, r)`), so the comparisons are paired. Times are the
+//! minimum over sequential timed runs, as the paper takes the minimum to avoid the
+//! operating system's interventions.
+
+use super::Scale;
+use crate::error::{MpfError, Result};
+use crate::mpf::MpfConfig;
+use crate::radar::{Partition, RadarConfig, RadarState, run_partition};
+use pf_core::mc::{Par, stream_rng, try_replicate};
+use pf_core::metrics::{rmse, rmse_per_step};
+use serde::{Deserialize, Serialize};
+
+/// Configuration of Tables II and III.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TableConfig {
+    /// The scenario.
+    pub radar: RadarConfig,
+    /// Particles of the standard PF, `N = 2000`.
+    pub n_pf: usize,
+    /// Monte Carlo runs `N_MC = 100`.
+    pub n_mc: usize,
+    /// Sequential timed runs per time measurement (minimum kept).
+    pub timing_reps: usize,
+    /// Smallest `N` the searches may return.
+    pub n_min: usize,
+    /// Partitions, the standard PF (`PPPPPP`) first.
+    pub partitions: Vec<Partition>,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl Default for TableConfig {
+    fn default() -> Self {
+        Self::at(Scale::Full)
+    }
+}
+
+impl TableConfig {
+    /// A preset: `Full` is the paper's sizes.
+    pub fn at(scale: Scale) -> Self {
+        let (n_pf, n_mc, reps, steps) = match scale {
+            Scale::Quick => (150, 4, 1, 20),
+            Scale::Default => (1000, 16, 3, 50),
+            Scale::Full => (2000, 100, 10, 100),
+        };
+        Self {
+            radar: RadarConfig {
+                n_steps: steps,
+                ..RadarConfig::default()
+            },
+            n_pf,
+            n_mc,
+            timing_reps: reps,
+            n_min: 10,
+            partitions: Partition::paper(),
+            seed: 1,
+        }
+    }
+
+    /// Check the configuration.
+    ///
+    /// # Errors
+    /// Any part invalid; the first partition not `PPPPPP`.
+    pub fn validate(&self) -> Result<()> {
+        self.radar.validate()?;
+        MpfConfig::new(self.n_pf).validate()?;
+        for (name, v) in [
+            ("N_MC", self.n_mc),
+            ("timing_reps", self.timing_reps),
+            ("n_min", self.n_min),
+        ] {
+            if v == 0 {
+                return Err(MpfError::InvalidParameter {
+                    name,
+                    value: 0.0,
+                    reason: "must be at least 1",
+                });
+            }
+        }
+        if self.partitions.first().is_none_or(|p| p.k() != 0) {
+            return Err(MpfError::Partition {
+                partition: self
+                    .partitions
+                    .first()
+                    .map(Partition::name)
+                    .unwrap_or_default(),
+                reason: "the first partition must be the standard PF, PPPPPP",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// One column of Table II or III.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TableRow {
+    /// `PPKKKK` etc.
+    pub name: String,
+    /// Particles `N`.
+    #[serde(rename = "N")]
+    pub n: usize,
+    /// Position RMSE.
+    pub rmse_pos: f64,
+    /// Velocity RMSE.
+    pub rmse_vel: f64,
+    /// Acceleration RMSE.
+    pub rmse_acc: f64,
+    /// Filter time (s).
+    pub time_s: f64,
+}
+
+/// A table as `pf-viz mpf table2|table3 --json` prints it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TableResult {
+    /// One row per partition.
+    pub partitions: Vec<TableRow>,
+}
+
+/// RMSE over time of one partition (per-step RMSE over the Monte Carlo runs).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RmseCurve {
+    /// Partition.
+    pub name: String,
+    /// Position.
+    pub pos: Vec<f64>,
+    /// Velocity.
+    pub vel: Vec<f64>,
+    /// Acceleration.
+    pub acc: Vec<f64>,
+}
+
+/// Everything a table experiment computed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TableReport {
+    /// Our table.
+    pub table: TableResult,
+    /// The paper's table.
+    pub paper: TableResult,
+    /// The target: the PF's time (Table II) or velocity RMSE (Table III).
+    pub target: f64,
+    /// Whether each row's search reached the target within its range.
+    pub reached: Vec<bool>,
+    /// RMSE over time per partition.
+    pub rmse_over_time: Vec<RmseCurve>,
+}
+
+fn row(name: &str, n: usize, pos: f64, vel: f64, acc: f64, time_s: f64) -> TableRow {
+    TableRow {
+        name: name.to_string(),
+        n,
+        rmse_pos: pos,
+        rmse_vel: vel,
+        rmse_acc: acc,
+        time_s,
+    }
+}
+
+/// The paper's Table II.
+pub fn paper_table2() -> TableResult {
+    TableResult {
+        partitions: vec![
+            row("PPPPPP", 2000, 7.10, 3.62, 0.52, 0.59),
+            row("PPKKPP", 2029, 5.81, 3.27, 0.47, 0.58),
+            row("PPPPKK", 1974, 5.76, 3.28, 0.45, 0.57),
+            row("PPKKKK", 2574, 5.60, 3.21, 0.44, 0.60),
+        ],
+    }
+}
+
+/// The paper's Table III.
+pub fn paper_table3() -> TableResult {
+    TableResult {
+        partitions: vec![
+            row("PPPPPP", 2393, 7.07, 3.58, 0.50, 0.73),
+            row("PPKKPP", 864, 6.98, 3.60, 0.51, 0.26),
+            row("PPPPKK", 943, 7.12, 3.65, 0.49, 0.28),
+            row("PPKKKK", 264, 7.27, 3.61, 0.48, 0.10),
+        ],
+    }
+}
+
+struct McOutcome {
+    pos: f64,
+    vel: f64,
+    acc: f64,
+    curve: RmseCurve,
+}
+
+fn monte_carlo(
+    cfg: &TableConfig,
+    part: &Partition,
+    n: usize,
+    truth: &[RadarState],
+) -> Result<McOutcome> {
+    let runs = try_replicate(cfg.seed, cfg.n_mc, Par::Rayon, |_, rng| {
+        let ys = cfg.radar.measure(truth, rng);
+        run_partition(part, &cfg.radar, MpfConfig::new(n), truth, &ys, rng)
+    })?;
+    let get = |f: fn(&crate::radar::RunErrors) -> &Vec<f64>| {
+        runs.iter().map(|r| f(r).clone()).collect::<Vec<_>>()
+    };
+    let (p, v, a) = (get(|r| &r.sq_pos), get(|r| &r.sq_vel), get(|r| &r.sq_acc));
+    Ok(McOutcome {
+        pos: rmse(&p)?,
+        vel: rmse(&v)?,
+        acc: rmse(&a)?,
+        curve: RmseCurve {
+            name: part.name(),
+            pos: rmse_per_step(&p)?,
+            vel: rmse_per_step(&v)?,
+            acc: rmse_per_step(&a)?,
+        },
+    })
+}
+
+fn time_of(cfg: &TableConfig, part: &Partition, n: usize, truth: &[RadarState]) -> Result<f64> {
+    let mut best = f64::INFINITY;
+    for rep in 0..cfg.timing_reps {
+        let mut rng = stream_rng(cfg.seed ^ 0x7157, rep as u64);
+        let ys = cfg.radar.measure(truth, &mut rng);
+        best = best
+            .min(run_partition(part, &cfg.radar, MpfConfig::new(n), truth, &ys, &mut rng)?.time_s);
+    }
+    Ok(best)
+}
+
+/// Table II: the PF's time with `N_PF` particles is the target; for each MPF partition the
+/// `N` whose time matches is found by proportional (secant through the origin) steps on
+/// measured times, then the RMSEs come from `N_MC` runs.
+///
+/// # Errors
+/// A bad configuration or a filter error.
+pub fn table2(cfg: &TableConfig) -> Result<TableReport> {
+    cfg.validate()?;
+    let truth = cfg.radar.truth();
+    let target = time_of(cfg, &cfg.partitions[0], cfg.n_pf, &truth)?;
+    let mut rows = Vec::new();
+    let mut curves = Vec::new();
+    let mut reached = Vec::new();
+    for (j, part) in cfg.partitions.iter().enumerate() {
+        let (n, time_s) = if j == 0 {
+            (cfg.n_pf, target)
+        } else {
+            let mut n = cfg.n_pf;
+            let mut t = time_of(cfg, part, n, &truth)?;
+            for _ in 0..3 {
+                let next = ((n as f64 * target / t).round() as usize).max(cfg.n_min);
+                if next == n {
+                    break;
+                }
+                n = next;
+                t = time_of(cfg, part, n, &truth)?;
+            }
+            (n, t)
+        };
+        reached.push((time_s - target).abs() <= 0.1 * target);
+        let mc = monte_carlo(cfg, part, n, &truth)?;
+        rows.push(row(&part.name(), n, mc.pos, mc.vel, mc.acc, time_s));
+        curves.push(mc.curve);
+    }
+    Ok(TableReport {
+        table: TableResult { partitions: rows },
+        paper: paper_table2(),
+        target,
+        reached,
+        rmse_over_time: curves,
+    })
+}
+
+/// Table III: the PF's velocity RMSE with `N_PF` particles is the target; for each MPF
+/// partition the smallest `N` in `[n_min, 2 N_PF]` whose velocity RMSE is at most the target
+/// is found by bisection on `log N` (common random numbers keep the RMSE nearly monotone in
+/// `N`), to within 5 %.
+///
+/// # Errors
+/// A bad configuration or a filter error.
+pub fn table3(cfg: &TableConfig) -> Result<TableReport> {
+    cfg.validate()?;
+    let truth = cfg.radar.truth();
+    let pf = monte_carlo(cfg, &cfg.partitions[0], cfg.n_pf, &truth)?;
+    let target = pf.vel;
+    let mut rows = vec![row(
+        &cfg.partitions[0].name(),
+        cfg.n_pf,
+        pf.pos,
+        pf.vel,
+        pf.acc,
+        time_of(cfg, &cfg.partitions[0], cfg.n_pf, &truth)?,
+    )];
+    let mut curves = vec![pf.curve];
+    let mut reached = vec![true];
+    for part in &cfg.partitions[1..] {
+        let (mut lo, mut hi) = (cfg.n_min, 2 * cfg.n_pf);
+        let at_lo = monte_carlo(cfg, part, lo, &truth)?;
+        let (best, ok) = if at_lo.vel <= target {
+            (Some((lo, at_lo)), true)
+        } else {
+            let mut at_hi = monte_carlo(cfg, part, hi, &truth)?;
+            let ok = at_hi.vel <= target;
+            while ok && (hi as f64) > 1.05 * lo as f64 && hi - lo > 1 {
+                let mid = ((lo as f64 * hi as f64).sqrt().round() as usize).clamp(lo + 1, hi - 1);
+                let at_mid = monte_carlo(cfg, part, mid, &truth)?;
+                if at_mid.vel <= target {
+                    hi = mid;
+                    at_hi = at_mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            (Some((hi, at_hi)), ok)
+        };
+        let (n, mc) = best.expect("set above");
+        let time_s = time_of(cfg, part, n, &truth)?;
+        rows.push(row(&part.name(), n, mc.pos, mc.vel, mc.acc, time_s));
+        curves.push(mc.curve);
+        reached.push(ok);
+    }
+    Ok(TableReport {
+        table: TableResult { partitions: rows },
+        paper: paper_table3(),
+        target,
+        reached,
+        rmse_over_time: curves,
+    })
+}

@@ -1,0 +1,300 @@
+//! Model (5): a state split into a part `x^p` handled by the particle filter and a part
+//! `x^k` handled by Kalman filters.
+//!
+//! ```text
+//! x^p_{t+1} = A^p x^p_t + A^k x^k_t + w^p_t,   w^p ~ N(0, Q^p)      (5a)
+//! x^k_{t+1} = F^p x^p_t + F^k x^k_t + w^k_t,   w^k ~ N(0, Q^k)      (5b)
+//! y_t       = h_t(x^p_t) + C_t x^k_t + e_t,    e   ~ N(0, R)        (5c)
+//! ```
+//!
+//! The noises are independent (the paper reduces the dependent case to this one by
+//! Gram–Schmidt). The matrices are time-invariant here; the paper allows `A_t`, `C_t`, … to
+//! vary, which the radar example does not need. Dimensions are const generics: `P` = p,
+//! `K` = k and `NY` = the measurement dimension, so every per-particle product is a
+//! fixed-size nalgebra operation.
+
+use crate::error::{MpfError, Result};
+use nalgebra::{Cholesky, SMatrix, SVector};
+use pf_core::{CoreError, StateSpaceModel};
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+/// The nonlinear measurement `h_t(x^p)` of eq. (5c), and how to form its residual.
+pub trait Measurement<const P: usize, const NY: usize>: Sync {
+    /// `h_t(x^p_t)`.
+    fn h(&self, t: usize, xp: &SVector<f64, P>) -> SVector<f64, NY>;
+
+    /// The residual `y − ŷ`. Override to wrap angles (the radar's azimuth).
+    fn residual(&self, y: &SVector<f64, NY>, y_hat: &SVector<f64, NY>) -> SVector<f64, NY> {
+        y - y_hat
+    }
+}
+
+/// A linear measurement `h(x^p) = H x^p`, for tests and fully linear models.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearMeasurement<const P: usize, const NY: usize> {
+    /// H.
+    pub h: SMatrix<f64, NY, P>,
+}
+
+impl<const P: usize, const NY: usize> Measurement<P, NY> for LinearMeasurement<P, NY> {
+    fn h(&self, _t: usize, xp: &SVector<f64, P>) -> SVector<f64, NY> {
+        self.h * xp
+    }
+}
+
+/// Gaussian `N(mean, cov)` with its lower Cholesky factor, computed once.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FactoredGaussian<const D: usize> {
+    /// Mean.
+    pub mean: SVector<f64, D>,
+    /// Covariance.
+    pub cov: SMatrix<f64, D, D>,
+    /// Lower Cholesky factor of `cov`.
+    pub chol: SMatrix<f64, D, D>,
+}
+
+impl<const D: usize> FactoredGaussian<D> {
+    /// Factor `cov`; `what` names it in the error.
+    ///
+    /// # Errors
+    /// A non-finite entry, an asymmetric or non-positive-definite covariance.
+    pub fn new(what: &'static str, mean: SVector<f64, D>, cov: SMatrix<f64, D, D>) -> Result<Self> {
+        check_finite(what, cov.as_slice())?;
+        check_finite(what, mean.as_slice())?;
+        let chol = spd_chol(what, &cov)?;
+        Ok(Self { mean, cov, chol })
+    }
+
+    /// Draw `mean + L z`, `z` from `D` standard normals in order.
+    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> SVector<f64, D> {
+        let z = SVector::<f64, D>::from_fn(|_, _| StandardNormal.sample(rng));
+        self.mean + self.chol * z
+    }
+}
+
+pub(crate) fn check_finite(what: &'static str, v: &[f64]) -> Result<()> {
+    if let Some((index, &value)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        return Err(CoreError::NonFiniteData { what, index, value }.into());
+    }
+    Ok(())
+}
+
+/// Lower Cholesky factor of a symmetric positive definite matrix (0×0 gives 0×0).
+pub(crate) fn spd_chol<const D: usize>(
+    what: &'static str,
+    m: &SMatrix<f64, D, D>,
+) -> Result<SMatrix<f64, D, D>> {
+    let scale = m.amax();
+    for j in 0..D {
+        for i in (j + 1)..D {
+            let gap = m[(i, j)] - m[(j, i)];
+            if gap.abs() > 1e-10 * scale {
+                return Err(CoreError::InvalidParameter {
+                    name: what,
+                    value: gap,
+                    reason: "covariance must be symmetric (value is M_ij − M_ji)",
+                }
+                .into());
+            }
+        }
+    }
+    Cholesky::new(*m).map(|c| c.l()).ok_or_else(|| {
+        CoreError::NotPositiveDefinite {
+            what,
+            pivot: (0..D).find(|&i| m[(i, i)] <= 0.0).unwrap_or(0),
+            value: (0..D).map(|i| m[(i, i)]).fold(f64::INFINITY, f64::min),
+        }
+        .into()
+    })
+}
+
+/// Model (5) with time-invariant matrices and a nonlinear measurement `H`.
+#[derive(Debug, Clone)]
+pub struct MixedLinearGaussian<const P: usize, const K: usize, const NY: usize, H> {
+    /// `A^p` (p×p).
+    pub a_p: SMatrix<f64, P, P>,
+    /// `A^k` (p×k).
+    pub a_k: SMatrix<f64, P, K>,
+    /// `F^p` (k×p).
+    pub f_p: SMatrix<f64, K, P>,
+    /// `F^k` (k×k).
+    pub f_k: SMatrix<f64, K, K>,
+    /// `Q^p`.
+    pub q_p: SMatrix<f64, P, P>,
+    /// `Q^k`.
+    pub q_k: SMatrix<f64, K, K>,
+    /// `C_t` (ny×k).
+    pub c: SMatrix<f64, NY, K>,
+    /// `e ~ N(0, R)`, factored.
+    pub e: FactoredGaussian<NY>,
+    /// `x^p_0 ~ p_{x_0^p}`, a Gaussian here.
+    pub x0_p: FactoredGaussian<P>,
+    /// `x̄^k_0` and `P̄_0` of Alg. 1, step 1.
+    pub x0_k: SVector<f64, K>,
+    /// `P̄_0`.
+    pub p0_k: SMatrix<f64, K, K>,
+    /// `h_t`.
+    pub h: H,
+    /// `½ log det(2πR)`, for the `C_t = 0` likelihood.
+    half_log_det_2pi_r: f64,
+    /// Lower factor of `Q^p`, for the standard PF (k = 0) view.
+    chol_q_p: SMatrix<f64, P, P>,
+}
+
+/// The matrices of model (5), as given by the user (see [`MixedLinearGaussian::new`]).
+#[derive(Debug, Clone)]
+pub struct Model5Matrices<const P: usize, const K: usize, const NY: usize> {
+    /// `A^p`.
+    pub a_p: SMatrix<f64, P, P>,
+    /// `A^k`.
+    pub a_k: SMatrix<f64, P, K>,
+    /// `F^p`.
+    pub f_p: SMatrix<f64, K, P>,
+    /// `F^k`.
+    pub f_k: SMatrix<f64, K, K>,
+    /// `Q^p`.
+    pub q_p: SMatrix<f64, P, P>,
+    /// `Q^k`.
+    pub q_k: SMatrix<f64, K, K>,
+    /// `C_t`.
+    pub c: SMatrix<f64, NY, K>,
+    /// `R`.
+    pub r: SMatrix<f64, NY, NY>,
+    /// Mean of `x^p_0`.
+    pub x0_p: SVector<f64, P>,
+    /// Covariance of `x^p_0`.
+    pub p0_p: SMatrix<f64, P, P>,
+    /// `x̄^k_0`.
+    pub x0_k: SVector<f64, K>,
+    /// `P̄_0`.
+    pub p0_k: SMatrix<f64, K, K>,
+}
+
+impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>>
+    MixedLinearGaussian<P, K, NY, H>
+{
+    /// Build and validate model (5): finite entries; `Q^p`, `R`, `P^p_0` positive definite;
+    /// `Q^k`, `P̄_0` symmetric positive definite (when `k > 0`).
+    ///
+    /// # Errors
+    /// [`MpfError::Core`] naming the matrix at fault.
+    pub fn new(m: Model5Matrices<P, K, NY>, h: H) -> Result<Self> {
+        for (what, v) in [
+            ("A^p", m.a_p.as_slice()),
+            ("A^k", m.a_k.as_slice()),
+            ("F^p", m.f_p.as_slice()),
+            ("F^k", m.f_k.as_slice()),
+            ("C_t", m.c.as_slice()),
+            ("x̄^k_0", m.x0_k.as_slice()),
+        ] {
+            check_finite(what, v)?;
+        }
+        let chol_q_p = FactoredGaussian::new("Q^p", SVector::zeros(), m.q_p)?.chol;
+        if K > 0 {
+            FactoredGaussian::new("Q^k", SVector::<f64, K>::zeros(), m.q_k)?;
+            FactoredGaussian::new("P̄_0", m.x0_k, m.p0_k)?;
+        }
+        let e = FactoredGaussian::new("R", SVector::zeros(), m.r)?;
+        let x0_p = FactoredGaussian::new("P^p_0", m.x0_p, m.p0_p)?;
+        let half_log_det_2pi_r = half_log_det_2pi(&e.chol);
+        Ok(Self {
+            a_p: m.a_p,
+            a_k: m.a_k,
+            f_p: m.f_p,
+            f_k: m.f_k,
+            q_p: m.q_p,
+            q_k: m.q_k,
+            c: m.c,
+            e,
+            x0_p,
+            x0_k: m.x0_k,
+            p0_k: m.p0_k,
+            h,
+            half_log_det_2pi_r,
+            chol_q_p,
+        })
+    }
+
+    /// Whether `C_t = 0`, so Alg. 1's shared Riccati recursion applies.
+    pub fn c_is_zero(&self) -> bool {
+        self.c.iter().all(|&v| v == 0.0)
+    }
+
+    /// `R`.
+    pub fn r(&self) -> &SMatrix<f64, NY, NY> {
+        &self.e.cov
+    }
+
+    /// `log N(y; h(x^p), R)`: the importance weight `q_t` of Alg. 1, step 2 (`C_t = 0`).
+    #[inline]
+    pub fn log_likelihood_p(&self, t: usize, xp: &SVector<f64, P>, y: &SVector<f64, NY>) -> f64 {
+        let e = self.h.residual(y, &self.h.h(t, xp));
+        log_normal_chol(&self.e.chol, e, self.half_log_det_2pi_r)
+    }
+}
+
+/// `½ log det(2π L Lᵀ)`.
+pub(crate) fn half_log_det_2pi<const D: usize>(l: &SMatrix<f64, D, D>) -> f64 {
+    let log_diag: f64 = (0..D).map(|i| l[(i, i)].ln()).sum();
+    log_diag + 0.5 * D as f64 * (2.0 * std::f64::consts::PI).ln()
+}
+
+/// `log N(e; 0, L Lᵀ)` given `½ log det(2π L Lᵀ)`.
+#[inline]
+pub(crate) fn log_normal_chol<const D: usize>(
+    l: &SMatrix<f64, D, D>,
+    e: SVector<f64, D>,
+    half_log_det: f64,
+) -> f64 {
+    let z = l
+        .solve_lower_triangular(&e)
+        .unwrap_or_else(|| SVector::repeat(f64::NAN));
+    -0.5 * z.norm_squared() - half_log_det
+}
+
+/// With `k = 0` the model is an ordinary state-space model on `x = x^p`: the standard PF of
+/// pf-core runs on it, and the MPF with `k = 0` must behave exactly like that filter.
+impl<const P: usize, const NY: usize, H: Measurement<P, NY>> StateSpaceModel
+    for MixedLinearGaussian<P, 0, NY, H>
+{
+    type State = SVector<f64, P>;
+    type Obs = SVector<f64, NY>;
+    type Input = ();
+
+    fn sample_initial<R: Rng + ?Sized>(&self, rng: &mut R) -> Self::State {
+        self.x0_p.sample(rng)
+    }
+
+    fn sample_transition<R: Rng + ?Sized>(
+        &self,
+        _t: usize,
+        x_prev: &Self::State,
+        _u: Option<&()>,
+        rng: &mut R,
+    ) -> Self::State {
+        let z = SVector::<f64, P>::from_fn(|_, _| StandardNormal.sample(rng));
+        self.a_p * x_prev + self.chol_q_p * z
+    }
+
+    fn log_likelihood(&self, t: usize, x: &Self::State, y: &Self::Obs) -> f64 {
+        self.log_likelihood_p(t, x, y)
+    }
+}
+
+/// Check an observation sequence: finite values. Returns the number of observed steps.
+///
+/// # Errors
+/// [`MpfError::NonFiniteObservation`] at the first bad value.
+pub fn check_observations<const NY: usize>(ys: &[Option<SVector<f64, NY>>]) -> Result<usize> {
+    let mut n = 0;
+    for (t, y) in ys.iter().enumerate() {
+        if let Some(y) = y {
+            if let Some((index, &value)) = y.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(MpfError::NonFiniteObservation { t, index, value });
+            }
+            n += 1;
+        }
+    }
+    Ok(n)
+}
