@@ -8,7 +8,7 @@
 //! | module | holds |
 //! |---|---|
 //! | [`cli`] | the clap command line |
-//! | [`bench`] | `pf-viz bench bootstrap` |
+//! | [`bench`](mod@bench) | `pf-viz bench bootstrap` |
 //! | [`data`] | reading observation CSV files |
 //! | [`report`] | `pf-viz report`: the registry of sections, one file per paper |
 //! | [`png`] | plot kinds, each a function from plain data to a PNG |

@@ -7,7 +7,7 @@
 //! | module | plot kind |
 //! |---|---|
 //! | [`genealogy`] | particle genealogy (Cappé & Moulines, Fig. 1) |
-//! | [`line`] | line plot with optional shaded bands and reference lines |
+//! | [`line`](mod@line) | line plot with optional shaded bands and reference lines |
 //! | [`style`] | the shared look: size, font, colours, dash patterns |
 
 pub mod genealogy;
