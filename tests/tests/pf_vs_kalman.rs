@@ -88,10 +88,9 @@ fn likelihood_estimate_is_unbiased_and_filter_means_match_the_kalman_filter() {
     }
 }
 
-/// The same unbiasedness for every resampler and under adaptive (ESS-triggered) resampling,
-/// on the scalar AR(1) model of Cappé & Moulines, whose Kalman twin is `LinearGaussian::scalar`.
-#[test]
-fn every_resampler_and_policy_gives_an_unbiased_likelihood() {
+/// The noisy AR(1) model (φ = 0.9, σ = 0.5, ρ = 1), 41 observations simulated from stream
+/// `(seed, 0)`, and their exact log-likelihood from the model's Kalman twin.
+fn ar1_case(seed: u64) -> (NoisyAr1, Vec<Option<f64>>, f64) {
     let (phi, sigma, rho) = (0.9, 0.5, 1.0);
     let ar1 = NoisyAr1::new(phi, sigma, rho).unwrap();
     let twin = LinearGaussian::scalar(
@@ -103,21 +102,31 @@ fn every_resampler_and_policy_gives_an_unbiased_likelihood() {
         ar1.s0() * ar1.s0(),
     )
     .unwrap();
-    let (_, ys) = ar1.simulate(40, &mut stream_rng(7, 0));
+    let (_, ys) = ar1.simulate(40, &mut stream_rng(seed, 0));
     let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
     let yv: Vec<Option<DVector<f64>>> = ys
         .iter()
         .map(|y| y.map(|y| DVector::from_element(1, y)))
         .collect();
     let exact = kalman_filter(&twin, &yv, None).unwrap().log_likelihood;
+    (ar1, ys, exact)
+}
 
-    let policies = [
-        ResamplePolicy::Always,
-        ResamplePolicy::EssBelow(EssThreshold::Fraction(0.5)),
-    ];
-    let z = bonferroni_z(Resampler::ALL.len() * policies.len());
+/// Every resampling policy the unbiasedness tests cover.
+const POLICIES: [ResamplePolicy; 2] = [
+    ResamplePolicy::Always,
+    ResamplePolicy::EssBelow(EssThreshold::Fraction(0.5)),
+];
+
+/// The same unbiasedness for every resampler and under adaptive (ESS-triggered) resampling,
+/// on the scalar AR(1) model of Cappé & Moulines, whose Kalman twin is `LinearGaussian::scalar`.
+#[test]
+fn every_resampler_and_policy_gives_an_unbiased_likelihood() {
+    let (ar1, ys, exact) = ar1_case(7);
+
+    let z = bonferroni_z(Resampler::ALL.len() * POLICIES.len());
     for resampler in Resampler::ALL {
-        for policy in policies {
+        for policy in POLICIES {
             let cfg = FilterConfig {
                 n_particles: 200,
                 resampler,
@@ -141,31 +150,10 @@ fn every_resampler_and_policy_gives_an_unbiased_likelihood() {
 /// for every scheme and policy, with several chunks in play (N = 200, chunks of 48).
 #[test]
 fn batch_filter_likelihood_is_unbiased() {
-    let (phi, sigma, rho) = (0.9, 0.5, 1.0);
-    let ar1 = NoisyAr1::new(phi, sigma, rho).unwrap();
-    let twin = LinearGaussian::scalar(
-        phi,
-        1.0,
-        sigma * sigma,
-        rho * rho,
-        ar1.m0(),
-        ar1.s0() * ar1.s0(),
-    )
-    .unwrap();
-    let (_, ys) = ar1.simulate(40, &mut stream_rng(8, 0));
-    let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
-    let yv: Vec<Option<DVector<f64>>> = ys
-        .iter()
-        .map(|y| y.map(|y| DVector::from_element(1, y)))
-        .collect();
-    let exact = kalman_filter(&twin, &yv, None).unwrap().log_likelihood;
-    let policies = [
-        ResamplePolicy::Always,
-        ResamplePolicy::EssBelow(EssThreshold::Fraction(0.5)),
-    ];
-    let z = bonferroni_z(Resampler::ALL.len() * policies.len());
+    let (ar1, ys, exact) = ar1_case(8);
+    let z = bonferroni_z(Resampler::ALL.len() * POLICIES.len());
     for resampler in Resampler::ALL {
-        for policy in policies {
+        for policy in POLICIES {
             let ratio = replicate(3, 400, Par::Rayon, |r, _| {
                 let cfg = BatchConfig {
                     resampler,
