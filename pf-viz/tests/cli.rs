@@ -1,173 +1,167 @@
-//! The `pf-viz` binary as a user runs it.
+//! End-to-end checks of the `pf-viz` binary.
 
+use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+const BIN: &str = env!("CARGO_BIN_EXE_pf-viz");
+
+/// A fresh scratch directory, removed on drop.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(tag: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("pf-viz-cli-{tag}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = fs::remove_dir_all(&self.0);
+    }
+}
+
 fn pf_viz(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pf-viz"))
-        .args(args)
-        .output()
-        .expect("pf-viz runs")
+    Command::new(BIN).args(args).output().expect("run pf-viz")
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pf-viz-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
 }
 
-/// A PNG whose IHDR says it is at least `min_w` × `min_h` and whose file is not tiny.
-fn assert_png(path: &Path, min_w: u32, min_h: u32) {
-    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{}", path.display());
-    let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
-    let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
-    assert!(w >= min_w && h >= min_h, "{}: {w}×{h}", path.display());
-    // A blank 1200×800 PNG compresses to a few kB; a drawn figure is far larger.
+/// Width and height from a PNG's IHDR chunk, after checking the signature.
+fn png_size(bytes: &[u8]) -> (u32, u32) {
+    assert!(bytes.len() > 33, "PNG too short");
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "PNG signature");
+    assert_eq!(&bytes[12..16], b"IHDR", "first chunk is IHDR");
+    let be = |i: usize| u32::from_be_bytes(bytes[i..i + 4].try_into().unwrap());
+    (be(16), be(20))
+}
+
+fn check_png(path: &Path) {
+    let bytes = fs::read(path).unwrap();
+    assert_eq!(png_size(&bytes), (1200, 800), "{}", path.display());
+    // A drawn figure with text and thousands of marks compresses to tens of KB; a blank
+    // 1200×800 canvas to well under 10 KB.
     assert!(
         bytes.len() > 20_000,
-        "{}: only {} bytes",
+        "{} is only {} bytes",
         path.display(),
         bytes.len()
+    );
+    assert_eq!(
+        &bytes[bytes.len() - 8..bytes.len() - 4],
+        b"IEND",
+        "PNG ends with IEND"
     );
 }
 
 #[test]
 fn report_writes_figures_recording_and_summary() {
-    let out = temp_dir("report");
-    let o = pf_viz(&["report", "--out", out.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_png(&out.join("genealogy.png"), 800, 600);
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
-    let core = &summary["sections"]["core"];
-    assert_eq!(core["config"]["filter"]["n_particles"], 50);
-    assert_eq!(core["config"]["n"], 100);
-    assert!(summary["seed"].is_u64());
+    let s = Scratch::new("report");
+    let out = s.0.join("nested/out");
+    let o = pf_viz(&["report", "--out", out.to_str().unwrap(), "--seed", "7"]);
+    assert!(
+        o.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+
+    let mut expected = vec!["ess.png", "genealogy.png", "summary.json"];
     if cfg!(feature = "rrd") {
-        let rrd = std::fs::read(out.join("genealogy.rrd")).unwrap();
-        assert!(rrd.len() > 1000 && &rrd[..4] == b"RRF2", "not an rrd file");
+        expected.push("genealogy.rrd");
+        expected.sort_unstable();
     }
-    // No temporary file is left behind.
-    for entry in std::fs::read_dir(&out).unwrap() {
-        let name = entry.unwrap().file_name().into_string().unwrap();
-        assert!(!name.contains(".tmp"), "left behind: {name}");
+    assert_eq!(names(&out), expected, "exactly these files, no temporaries");
+
+    check_png(&out.join("genealogy.png"));
+    check_png(&out.join("ess.png"));
+
+    let summary: serde_json::Value =
+        serde_json::from_slice(&fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["seed"], 7);
+    let core = &summary["sections"]["core"];
+    for key in [
+        "config",
+        "log_lik",
+        "coalescence_time",
+        "surviving_per_step",
+        "ess",
+        "genealogy",
+        "files",
+    ] {
+        assert!(!core[key].is_null(), "summary lacks sections.core.{key}");
     }
-    let _ = std::fs::remove_dir_all(&out);
+    assert_eq!(core["config"]["filter"]["n_particles"], 50);
+    assert_eq!(core["config"]["filter"]["resampler"], "multinomial");
+    let steps = core["config"]["n"].as_u64().unwrap() as usize + 1;
+    assert_eq!(core["ess"].as_array().unwrap().len(), steps);
+    let surviving = core["surviving_per_step"].as_array().unwrap();
+    assert_eq!(surviving.len(), steps);
+    // Every final particle survives trivially; the count never grows backwards in time.
+    assert_eq!(surviving[steps - 1], 50);
+    assert!(core["log_lik"].as_f64().unwrap().is_finite());
+
+    if cfg!(feature = "rrd") {
+        let rrd = fs::read(out.join("genealogy.rrd")).unwrap();
+        assert_eq!(&rrd[..4], b"RRF2", "rrd magic bytes");
+        assert!(rrd.len() > 10_000);
+    }
 }
 
 #[test]
-fn an_unwritable_out_dir_is_one_line_and_nothing_is_written() {
-    let dir = temp_dir("blocked");
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("a-file");
-    std::fs::write(&file, "x").unwrap();
-    let target = file.join("report");
-    let o = pf_viz(&["report", "--out", target.to_str().unwrap()]);
-    assert!(!o.status.success());
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.starts_with("error: "), "{err}");
-    assert!(!target.exists());
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-#[test]
-fn bad_arguments_exit_non_zero() {
-    assert!(!pf_viz(&["report"]).status.success());
-    assert!(
-        !pf_viz(&["report", "--out", "/tmp/x", "--bogus"])
-            .status
-            .success()
+fn same_seed_same_numbers() {
+    let s = Scratch::new("determinism");
+    let (a, b) = (s.0.join("a"), s.0.join("b"));
+    for d in [&a, &b] {
+        let o = pf_viz(&["report", "--out", d.to_str().unwrap(), "--no-rrd"]);
+        assert!(o.status.success());
+    }
+    assert_eq!(
+        fs::read(a.join("summary.json")).unwrap(),
+        fs::read(b.join("summary.json")).unwrap()
     );
     assert!(
-        !pf_viz(&["bench", "bootstrap", "--resampler", "bogus"])
-            .status
-            .success()
+        !a.join("genealogy.rrd").exists(),
+        "--no-rrd writes no recording"
     );
-    let o = pf_viz(&["bench", "bootstrap", "--particles", "0", "--json"]);
-    assert!(!o.status.success());
-    assert!(o.stdout.is_empty(), "nothing on stdout on error");
 }
 
 #[test]
-fn bench_bootstrap_keeps_its_json_contract() {
-    let dir = temp_dir("bench");
-    std::fs::create_dir_all(&dir).unwrap();
-    let data = dir.join("y.csv");
-    let ys: Vec<String> = (0..51)
-        .map(|k| format!("{}", (k as f64 * 0.1).sin()))
-        .collect();
-    std::fs::write(
-        &data,
-        format!(
-            "t,y\n{}\n",
-            ys.iter()
-                .enumerate()
-                .map(|(k, y)| format!("{k},{y}"))
-                .collect::<Vec<_>>()
-                .join("\n")
-        ),
-    )
-    .unwrap();
-    for threads in ["1", "2"] {
-        let o = pf_viz(&[
-            "bench",
-            "bootstrap",
-            "--data",
-            data.to_str().unwrap(),
-            "--particles",
-            "2000",
-            "--threads",
-            threads,
-            "--seed",
-            "3",
-            "--json",
-        ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-        for key in [
-            "particles",
-            "steps",
-            "threads",
-            "seconds",
-            "ns_per_particle_step",
-            "loglik",
-        ] {
-            assert!(v.get(key).is_some(), "missing {key}");
-        }
-        assert_eq!(v["particles"], 2000);
-        assert_eq!(v["steps"], 50);
-        assert!(v["loglik"].as_f64().unwrap().is_finite());
+fn unwritable_out_fails_with_one_line_and_leaves_nothing() {
+    let s = Scratch::new("unwritable");
+    let file = s.0.join("plain-file");
+    fs::write(&file, b"not a directory").unwrap();
+    let out = file.join("out");
+    let o = pf_viz(&["report", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let stderr = String::from_utf8(o.stderr).unwrap();
+    assert_eq!(stderr.lines().count(), 1, "one line: {stderr:?}");
+    assert!(stderr.starts_with("error: "), "{stderr:?}");
+    assert!(stderr.contains("plain-file"), "names the path: {stderr:?}");
+    assert_eq!(names(&s.0), vec!["plain-file"], "nothing created");
+    assert_eq!(fs::read(&file).unwrap(), b"not a directory");
+}
+
+#[test]
+fn bad_arguments_are_rejected() {
+    for args in [
+        &["report", "--out", "x", "--bogus"][..],
+        &["report"][..],
+        &["report", "--out", "x", "--seed", "minus-one"][..],
+        &["frobnicate"][..],
+    ] {
+        let o = pf_viz(args);
+        assert!(!o.status.success(), "{args:?} should fail");
+        assert!(!o.stderr.is_empty(), "{args:?} should explain");
     }
-    // Same seed, different thread counts: the same estimate, bit for bit.
-    let ll = |t: &str| {
-        let o = pf_viz(&[
-            "bench",
-            "bootstrap",
-            "--data",
-            data.to_str().unwrap(),
-            "--particles",
-            "20000",
-            "--threads",
-            t,
-            "--json",
-        ]);
-        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["loglik"]
-            .as_f64()
-            .unwrap()
-    };
-    assert_eq!(ll("1").to_bits(), ll("2").to_bits());
-    // A malformed data file names the line.
-    std::fs::write(&data, "y\n1.0\noops\n").unwrap();
-    let o = pf_viz(&[
-        "bench",
-        "bootstrap",
-        "--data",
-        data.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("line 3"));
-    let _ = std::fs::remove_dir_all(&dir);
+    assert!(!Path::new("x").exists(), "no output for rejected arguments");
 }

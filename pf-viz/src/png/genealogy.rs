@@ -21,6 +21,9 @@ use super::style::{self, plot_err};
 use super::{Canvas, render_png};
 use crate::error::{Result, VizError};
 
+/// Extra y range above the data, as a fraction of the data range, that holds the legend.
+const LEGEND_HEADROOM: f64 = 0.36;
+
 /// Everything a genealogy figure shows, as plain numbers. Index `k` is the time step,
 /// `i` the particle.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -162,6 +165,8 @@ fn draw(
     let last = (data.n_steps() - 1) as f64;
     let (y_lo, y_hi) = data.y_extent();
     let (y_lo, y_hi) = style::padded(y_lo, y_hi, 0.06);
+    // Headroom for the legend, so it never hides data.
+    let y_hi = y_hi + LEGEND_HEADROOM * (y_hi - y_lo);
     let mut chart = ChartBuilder::on(root)
         .caption(&labels.title, style::title())
         .margin(style::MARGIN_PX)
@@ -206,7 +211,7 @@ fn draw(
         .label("all particle paths (parent → child)")
         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 30, y)], thin.stroke_width(2)));
 
-    let dot = style::MID_GREY.filled();
+    let dot = style::POINT_GREY.filled();
     chart
         .draw_series(
             data.positions

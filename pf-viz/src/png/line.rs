@@ -7,7 +7,7 @@ use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::style::{self, Dash, Marker, plot_err};
+use super::style::{self, Dash, LegendPos, Marker, plot_err};
 use super::{Canvas, render_png};
 use crate::error::{Result, VizError};
 
@@ -55,8 +55,11 @@ pub struct LinePlot {
     pub series: Vec<Series>,
     /// Horizontal reference lines.
     pub ref_lines: Vec<RefLine>,
-    /// Fixed y range; `None` fits the data, bands and reference lines.
+    /// Fixed y range; `None` fits the data, bands and reference lines (plus headroom for
+    /// the legend when it sits at the top).
     pub y_range: Option<(f64, f64)>,
+    /// Where the legend sits; keep it clear of the data with `y_range` or the headroom.
+    pub legend: LegendPos,
 }
 
 impl LinePlot {
@@ -239,7 +242,7 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
 
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::LowerRight)
+        .position(plot.legend.to_plotters())
         .margin(12)
         .legend_area_size(40)
         .label_font(style::text(style::LEGEND_PX))
@@ -288,6 +291,7 @@ mod tests {
             }],
             ref_lines: vec![],
             y_range: None,
+            legend: LegendPos::UpperLeft,
         };
         p.validate().unwrap();
         p.series[0].band = Some(Band {

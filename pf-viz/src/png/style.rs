@@ -38,6 +38,8 @@ pub const DARK_BLUE: RGBColor = RGBColor(20, 60, 140);
 pub const DARK_RED: RGBColor = RGBColor(180, 30, 30);
 /// Mid grey: secondary series.
 pub const MID_GREY: RGBColor = RGBColor(120, 120, 120);
+/// Grey of scatter points drawn as context.
+pub const POINT_GREY: RGBColor = RGBColor(150, 150, 150);
 /// Light grey: context drawn behind everything else.
 pub const LIGHT_GREY: RGBColor = RGBColor(200, 200, 200);
 /// Grid lines.
@@ -157,6 +159,34 @@ pub const SERIES: [SeriesStyle; 4] = [
 
 /// Shaded bands (confidence or Monte Carlo intervals) use the series colour at this opacity.
 pub const BAND_ALPHA: f64 = 0.18;
+
+/// Where a legend sits inside the plot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LegendPos {
+    /// Top left corner.
+    #[default]
+    UpperLeft,
+    /// Top right corner.
+    UpperRight,
+    /// Bottom left corner.
+    LowerLeft,
+    /// Bottom right corner.
+    LowerRight,
+}
+
+impl LegendPos {
+    /// The plotters position.
+    pub fn to_plotters(self) -> plotters::chart::SeriesLabelPosition {
+        use plotters::chart::SeriesLabelPosition as P;
+        match self {
+            LegendPos::UpperLeft => P::UpperLeft,
+            LegendPos::UpperRight => P::UpperRight,
+            LegendPos::LowerLeft => P::LowerLeft,
+            LegendPos::LowerRight => P::LowerRight,
+        }
+    }
+}
 
 /// Pad a data range by `frac` of its width on both sides (and widen a degenerate range), so
 /// nothing is drawn on the frame.

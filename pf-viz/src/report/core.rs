@@ -20,6 +20,7 @@ use crate::error::{Result, VizError};
 use crate::png;
 use crate::png::genealogy::{GenealogyData, GenealogyLabels};
 use crate::png::line::{LinePlot, RefLine, Series};
+use crate::png::style::LegendPos;
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
@@ -172,7 +173,9 @@ pub fn run(ctx: &Context<'_>, config: CoreConfig) -> Result<CoreResult> {
             y: n_particles as f64,
             label: format!("N = {n_particles}"),
         }],
-        y_range: Some((0.0, n_particles as f64 * 1.05)),
+        // Headroom above N for the legend.
+        y_range: Some((0.0, n_particles as f64 * 1.34)),
+        legend: LegendPos::UpperLeft,
     };
     png::line::render(&ctx.path("ess.png"), &ess_plot)?;
     files.push("ess.png".to_owned());

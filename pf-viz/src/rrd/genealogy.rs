@@ -33,7 +33,7 @@ pub const ROOT: &str = "core/genealogy";
 /// Entity of the ESS trace.
 pub const ESS: &str = "core/ess";
 
-const LIGHT: [u8; 4] = [170, 170, 170, 150];
+const LIGHT: [u8; 4] = [130, 130, 130, 120];
 const GREY: [u8; 4] = [110, 110, 110, 255];
 const DARK_BLUE: [u8; 4] = [40, 90, 200, 255];
 const CURRENT: [u8; 4] = [240, 170, 40, 255];
@@ -254,7 +254,7 @@ fn log_axes(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
             (lo.min(x), hi.max(x))
         });
-    let x_step = nice_step((x_hi - x_lo) / 5.0);
+    let x_step = nice_step((x_hi - x_lo) / 8.0);
     let first = (x_lo / x_step).ceil() as i64;
     let last_tick = (x_hi / x_step).floor() as i64;
     let x_ticks: Vec<f64> = (first..=last_tick).map(|j| j as f64 * x_step).collect();
@@ -273,7 +273,7 @@ fn log_axes(
             let y = frame.at(0, x)[1];
             vec![[left, y], [right, y]]
         }))
-        .with_colors([[200, 200, 200, 60]])
+        .with_colors([[70, 70, 70, 255]])
         .with_radii([Radius::new_ui_points(0.5)])
         .with_draw_order(2.0),
     )?;

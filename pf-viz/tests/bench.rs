@@ -1,0 +1,113 @@
+//! `pf-viz bench bootstrap` as other tools call it: its JSON contract and its errors.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn pf_viz(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pf-viz"))
+        .args(args)
+        .output()
+        .expect("pf-viz runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pf-viz-bench-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+#[test]
+fn bad_bench_arguments_exit_non_zero_with_nothing_on_stdout() {
+    assert!(
+        !pf_viz(&["bench", "bootstrap", "--resampler", "bogus"])
+            .status
+            .success()
+    );
+    let o = pf_viz(&["bench", "bootstrap", "--particles", "0", "--json"]);
+    assert!(!o.status.success());
+    assert!(o.stdout.is_empty(), "nothing on stdout on error");
+    let o = pf_viz(&["bench", "bootstrap", "--threads", "0", "--json"]);
+    assert!(!o.status.success());
+}
+
+#[test]
+fn bench_bootstrap_keeps_its_json_contract() {
+    let dir = temp_dir("bench");
+    std::fs::create_dir_all(&dir).unwrap();
+    let data = dir.join("y.csv");
+    let ys: Vec<String> = (0..51)
+        .map(|k| format!("{}", (k as f64 * 0.1).sin()))
+        .collect();
+    std::fs::write(
+        &data,
+        format!(
+            "t,y\n{}\n",
+            ys.iter()
+                .enumerate()
+                .map(|(k, y)| format!("{k},{y}"))
+                .collect::<Vec<_>>()
+                .join("\n")
+        ),
+    )
+    .unwrap();
+    for threads in ["1", "2"] {
+        let o = pf_viz(&[
+            "bench",
+            "bootstrap",
+            "--data",
+            data.to_str().unwrap(),
+            "--particles",
+            "2000",
+            "--threads",
+            threads,
+            "--seed",
+            "3",
+            "--json",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        for key in [
+            "particles",
+            "steps",
+            "threads",
+            "seconds",
+            "ns_per_particle_step",
+            "loglik",
+        ] {
+            assert!(v.get(key).is_some(), "missing {key}");
+        }
+        assert_eq!(v["particles"], 2000);
+        assert_eq!(v["steps"], 50);
+        assert!(v["loglik"].as_f64().unwrap().is_finite());
+    }
+    // Same seed, different thread counts: the same estimate, bit for bit.
+    let ll = |t: &str| {
+        let o = pf_viz(&[
+            "bench",
+            "bootstrap",
+            "--data",
+            data.to_str().unwrap(),
+            "--particles",
+            "20000",
+            "--threads",
+            t,
+            "--json",
+        ]);
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["loglik"]
+            .as_f64()
+            .unwrap()
+    };
+    assert_eq!(ll("1").to_bits(), ll("2").to_bits());
+    // A malformed data file names the line.
+    std::fs::write(&data, "y\n1.0\noops\n").unwrap();
+    let o = pf_viz(&[
+        "bench",
+        "bootstrap",
+        "--data",
+        data.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("line 3"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
