@@ -1,0 +1,133 @@
+//! Ablation beyond the paper: final RMS position error of the OHF and AOHF against the
+//! number of λ steps and against the polar-grid resolution.
+
+use serde::{Deserialize, Serialize};
+
+use super::Scale;
+use super::rmse::{RmseConfig, replicate_errors};
+use crate::error::{HomotopyError, Result};
+use crate::filters::{Algorithm, FilterSettings};
+use crate::model::ScenarioConfig;
+
+/// Settings of the ablation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AblationConfig {
+    /// The scenario.
+    pub scenario: ScenarioConfig,
+    /// Baseline filter settings (each sweep varies one thing).
+    pub filters: FilterSettings,
+    /// Number of realisations.
+    pub realisations: usize,
+    /// Seed (the same realisations for every setting).
+    pub seed: u64,
+    /// Numbers of λ steps `m` to try.
+    pub lambda_steps: Vec<usize>,
+    /// Polar grids `[n_β, n_r]` to try.
+    pub grids: Vec<[usize; 2]>,
+}
+
+impl AblationConfig {
+    /// Size presets: quick 4 realisations, default 24, full 200.
+    pub fn at_scale(scale: Scale) -> Self {
+        let realisations = match scale {
+            Scale::Quick => 4,
+            Scale::Default => 24,
+            Scale::Full => 200,
+        };
+        Self {
+            scenario: ScenarioConfig::default(),
+            filters: FilterSettings::default(),
+            realisations,
+            seed: 1,
+            lambda_steps: vec![10, 20, 40, 60, 120],
+            grids: vec![[12, 6], [24, 12], [48, 24], [96, 48]],
+        }
+    }
+
+    /// Check the settings.
+    pub fn validate(&self) -> Result<()> {
+        self.scenario.validate()?;
+        self.filters.validate()?;
+        if self.realisations == 0 {
+            return Err(HomotopyError::InvalidParameter {
+                name: "realisations R",
+                value: 0.0,
+                reason: "at least one realisation is needed",
+            });
+        }
+        Ok(())
+    }
+}
+
+impl Default for AblationConfig {
+    fn default() -> Self {
+        Self::at_scale(Scale::Default)
+    }
+}
+
+/// Final RMS position errors (m) of the ablation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AblationResult {
+    /// The λ step counts tried.
+    pub lambda_steps: Vec<usize>,
+    /// OHF final RMS error per λ step count.
+    pub ohf_by_steps: Vec<f64>,
+    /// AOHF final RMS error per λ step count.
+    pub aohf_by_steps: Vec<f64>,
+    /// The grids `[n_β, n_r]` tried.
+    pub grids: Vec<[usize; 2]>,
+    /// OHF final RMS error per grid.
+    pub ohf_by_grid: Vec<f64>,
+    /// AOHF final RMS error per grid.
+    pub aohf_by_grid: Vec<f64>,
+}
+
+fn final_rmse(cfg: &RmseConfig) -> Result<[f64; 2]> {
+    let (sq, _) = replicate_errors(cfg, &[Algorithm::Ohf, Algorithm::Aohf])?;
+    let mut out = [0.0; 2];
+    for (o, s) in out.iter_mut().zip(&sq) {
+        let r = pf_core::metrics::rmse_per_step(s)?;
+        *o = *r.last().unwrap_or(&f64::NAN);
+    }
+    Ok(out)
+}
+
+/// Run both sweeps.
+///
+/// # Errors
+/// Invalid settings or a filter failure.
+pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
+    cfg.validate()?;
+    let base = RmseConfig {
+        scenario: cfg.scenario,
+        filters: cfg.filters,
+        realisations: cfg.realisations,
+        seed: cfg.seed,
+    };
+    let mut res = AblationResult {
+        lambda_steps: cfg.lambda_steps.clone(),
+        ohf_by_steps: Vec::new(),
+        aohf_by_steps: Vec::new(),
+        grids: cfg.grids.clone(),
+        ohf_by_grid: Vec::new(),
+        aohf_by_grid: Vec::new(),
+    };
+    for &m in &cfg.lambda_steps {
+        let mut c = base.clone();
+        c.filters.ohf.lambda.steps = m;
+        c.filters.aohf.lambda.steps = m;
+        let [o, a] = final_rmse(&c)?;
+        res.ohf_by_steps.push(o);
+        res.aohf_by_steps.push(a);
+    }
+    for &[nb, nr] in &cfg.grids {
+        let mut c = base.clone();
+        c.filters.grid.n_bearing = nb;
+        c.filters.grid.n_range = nr;
+        let [o, a] = final_rmse(&c)?;
+        res.ohf_by_grid.push(o);
+        res.aohf_by_grid.push(a);
+    }
+    Ok(res)
+}

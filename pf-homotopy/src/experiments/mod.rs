@@ -1,0 +1,35 @@
+//! One plain function per figure and table of Section 4 (plus the ablations): a config
+//! struct (serde, the paper's values as `Default`) in, a result struct of raw numbers out.
+//! Every run is deterministic for its seed: realisation `r` uses `stream_rng(seed, r)`.
+//!
+//! | function | figure / table |
+//! |---|---|
+//! | [`scenario_geometry`] | Fig. 1, the scenario |
+//! | [`ellipses`] | Fig. 2, OHF error ellipses over λ (CLI `ellipses`) |
+//! | [`rmse`] | Fig. 3, RMS position error, and the cost table (CLI `rmse`) |
+//! | [`ablation`] | final RMS error against λ steps and polar-grid resolution |
+
+mod ablation;
+mod ellipses;
+mod fig1;
+mod rmse;
+
+pub use ablation::{AblationConfig, AblationResult, ablation};
+pub use ellipses::{Ellipse, EllipsesConfig, EllipsesResult, ellipses};
+pub use fig1::{ScenarioGeometry, scenario_geometry};
+pub use rmse::{PerAlgorithm, RmseConfig, RmseResult, rmse};
+
+use serde::{Deserialize, Serialize};
+
+/// Size presets of the Monte Carlo experiments.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Scale {
+    /// Seconds: a handful of realisations, a small PF.
+    Quick,
+    /// About a minute on two cores.
+    #[default]
+    Default,
+    /// The paper's sizes: 500 realisations, N = 100 000.
+    Full,
+}

@@ -1,0 +1,299 @@
+//! The Gaussian parameterisation `f(p; θ) = N(p; μ, Σ)` of Section 3 and its derivatives.
+//!
+//! `θ = (μ, vech Σ)` has `r = D + D(D+1)/2` entries: the means, then the variances
+//! `Σ_ii`, then the covariances `Σ_ij`, `i < j`. For the BOT position (`D = 2`) this is the
+//! paper's `r = 5`: two means, two variances and one covariance.
+//!
+//! The paper omits the derivatives ("for the sake of brevity"). With `Λ = Σ⁻¹`,
+//! `e = p − μ`, `u = Λe` and `E_s = ∂Σ/∂θ_s = c_s(e_i e_jᵀ + e_j e_iᵀ)` for `s = (i, j)`
+//! (`c_s = ½` if `i = j`, else 1):
+//!
+//! - score `∇_θ log f`: `∂/∂μ = u`, `∂/∂Σ_ii = ½(u_i² − Λ_ii)`, `∂/∂Σ_ij = u_i u_j − Λ_ij`;
+//! - the integrand of (25), `∇log f ∇'log f − ∇∇'f / f = −∇∇' log f =: N(p; θ)`, with blocks
+//!   `N_μμ = Λ`, `N_μs = Λ a_s`, `N_st = a_sᵀ Λ a_t − ½ tr(Λ E_s Λ E_t)`, where
+//!   `a_s = E_s u` and `tr(Λ E_s Λ E_t) = 2 c_s c_t (Λ_ik Λ_jl + Λ_il Λ_jk)` for `t = (k, l)`;
+//! - its mean under `f(·; θ)` itself, the Fisher information that makes (27) closed form:
+//!   `H̃ = blockdiag(Λ, ½ tr(Λ E_s Λ E_t))` (the `μ–Σ` block vanishes since `E[u] = 0`,
+//!   and `E[a_sᵀΛa_t] = tr(Λ E_s Λ E_t)` since `E[uuᵀ] = Λ`).
+
+use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+
+use crate::error::{HomotopyError, Result};
+
+/// A `D`-variate Gaussian `N(μ, Σ)`: the density family `f(·; θ)`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Gaussian<const D: usize> {
+    /// μ.
+    pub mean: SVector<f64, D>,
+    /// Σ.
+    pub cov: SMatrix<f64, D, D>,
+}
+
+impl<const D: usize> Gaussian<D> {
+    /// `N(mean, cov)`; checked by [`Gaussian::validate`] where it matters.
+    pub fn new(mean: SVector<f64, D>, cov: SMatrix<f64, D, D>) -> Self {
+        Self { mean, cov }
+    }
+
+    /// Number of parameters `r = D + D(D+1)/2`.
+    pub const R: usize = D + D * (D + 1) / 2;
+
+    /// The pairs `(i, j)` indexing `vech Σ` in θ: diagonal first, then `i < j`.
+    pub fn cov_pairs() -> Vec<(usize, usize)> {
+        let mut v: Vec<(usize, usize)> = (0..D).map(|i| (i, i)).collect();
+        for i in 0..D {
+            for j in (i + 1)..D {
+                v.push((i, j));
+            }
+        }
+        v
+    }
+
+    /// θ as a vector of length `r`.
+    pub fn theta(&self) -> DVector<f64> {
+        let mut th = DVector::zeros(Self::R);
+        self.write_theta(&mut th);
+        th
+    }
+
+    /// Write θ into `th` (length `r`).
+    pub fn write_theta(&self, th: &mut DVector<f64>) {
+        for i in 0..D {
+            th[i] = self.mean[i];
+        }
+        for (s, (i, j)) in Self::cov_pairs().into_iter().enumerate() {
+            th[D + s] = self.cov[(i, j)];
+        }
+    }
+
+    /// The Gaussian of parameter vector `th` (Σ symmetric by construction).
+    pub fn from_theta(th: &DVector<f64>) -> Self {
+        let mut g = Self::new(SVector::zeros(), SMatrix::zeros());
+        for i in 0..D {
+            g.mean[i] = th[i];
+        }
+        for (s, (i, j)) in Self::cov_pairs().into_iter().enumerate() {
+            g.cov[(i, j)] = th[D + s];
+            g.cov[(j, i)] = th[D + s];
+        }
+        g
+    }
+
+    /// Cholesky factor of Σ, or `None` if Σ is not (numerically) positive definite or has a
+    /// non-finite entry.
+    pub fn chol(&self) -> Option<SMatrix<f64, D, D>> {
+        if self.cov.iter().any(|v| !v.is_finite()) || self.mean.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        self.cov.cholesky().map(|c| c.l())
+    }
+
+    /// Check that the mean is finite and Σ symmetric positive definite.
+    pub fn validate(&self, what: &'static str) -> Result<()> {
+        if let Some((i, &v)) = self.mean.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(HomotopyError::NonFiniteData {
+                what,
+                k: i,
+                value: v,
+            });
+        }
+        let m = DMatrix::from_fn(D, D, |i, j| self.cov[(i, j)]);
+        pf_core::gaussian::cholesky(what, &m)?;
+        Ok(())
+    }
+}
+
+/// Per-point derivative evaluator for a fixed θ: holds `Λ = Σ⁻¹` and the index pairs, so
+/// that scores and Hessian integrands at many grid points cost no allocation.
+#[derive(Debug, Clone)]
+pub struct Derivatives<const D: usize> {
+    mu: SVector<f64, D>,
+    lambda_mat: SMatrix<f64, D, D>,
+    pairs: Vec<(usize, usize)>,
+    /// `a_s` vectors for the current point (one per covariance parameter).
+    a: Vec<SVector<f64, D>>,
+}
+
+impl<const D: usize> Derivatives<D> {
+    /// Prepare for θ = `g`; `None` if Σ is singular.
+    pub fn new(g: &Gaussian<D>) -> Option<Self> {
+        let lambda_mat = g.cov.try_inverse()?;
+        let pairs = Gaussian::<D>::cov_pairs();
+        let a = vec![SVector::zeros(); pairs.len()];
+        Some(Self {
+            mu: g.mean,
+            lambda_mat,
+            pairs,
+            a,
+        })
+    }
+
+    /// Re-point at θ = `g`, reusing the buffers; `false` (and unchanged) if Σ is singular.
+    pub fn set(&mut self, g: &Gaussian<D>) -> bool {
+        match g.cov.try_inverse() {
+            Some(l) => {
+                self.mu = g.mean;
+                self.lambda_mat = l;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Λ = Σ⁻¹.
+    pub fn precision(&self) -> &SMatrix<f64, D, D> {
+        &self.lambda_mat
+    }
+
+    /// The score `∇_θ log f(p; θ)` into `s` (length `r`).
+    pub fn score(&self, p: &SVector<f64, D>, s: &mut DVector<f64>) {
+        let u = self.lambda_mat * (p - self.mu);
+        for i in 0..D {
+            s[i] = u[i];
+        }
+        for (t, &(i, j)) in self.pairs.iter().enumerate() {
+            s[D + t] = if i == j {
+                0.5 * (u[i] * u[i] - self.lambda_mat[(i, i)])
+            } else {
+                u[i] * u[j] - self.lambda_mat[(i, j)]
+            };
+        }
+    }
+
+    /// `½ tr(Λ E_s Λ E_t)` for covariance parameters `s`, `t`.
+    fn half_trace(&self, s: usize, t: usize) -> f64 {
+        let (i, j) = self.pairs[s];
+        let (k, l) = self.pairs[t];
+        let cs = if i == j { 0.5 } else { 1.0 };
+        let ct = if k == l { 0.5 } else { 1.0 };
+        let lm = &self.lambda_mat;
+        cs * ct * (lm[(i, k)] * lm[(j, l)] + lm[(i, l)] * lm[(j, k)])
+    }
+
+    /// Add `w · N(p; θ)` (the integrand of (25), `−∇∇' log f`) to `h` (r × r).
+    pub fn accumulate_hessian(&mut self, p: &SVector<f64, D>, w: f64, h: &mut DMatrix<f64>) {
+        let u = self.lambda_mat * (p - self.mu);
+        for (t, &(i, j)) in self.pairs.iter().enumerate() {
+            let mut a = SVector::<f64, D>::zeros();
+            if i == j {
+                a[i] = u[i];
+            } else {
+                a[i] = u[j];
+                a[j] = u[i];
+            }
+            self.a[t] = a;
+        }
+        let nc = self.pairs.len();
+        for r in 0..D {
+            for c in 0..D {
+                h[(r, c)] += w * self.lambda_mat[(r, c)];
+            }
+        }
+        for t in 0..nc {
+            let la = self.lambda_mat * self.a[t];
+            for r in 0..D {
+                h[(r, D + t)] += w * la[r];
+                h[(D + t, r)] += w * la[r];
+            }
+            for t2 in t..nc {
+                let v = w * (la.dot(&self.a[t2]) - self.half_trace(t, t2));
+                h[(D + t, D + t2)] += v;
+                if t2 != t {
+                    h[(D + t2, D + t)] += v;
+                }
+            }
+        }
+    }
+
+    /// The closed-form Fisher information `E_f[N(p; θ)]`, the H̃ of eq. (27), into `h`.
+    pub fn fisher(&self, h: &mut DMatrix<f64>) {
+        h.fill(0.0);
+        for r in 0..D {
+            for c in 0..D {
+                h[(r, c)] = self.lambda_mat[(r, c)];
+            }
+        }
+        let nc = self.pairs.len();
+        for s in 0..nc {
+            for t in 0..nc {
+                h[(D + s, D + t)] = self.half_trace(s, t);
+            }
+        }
+    }
+}
+
+/// `log N(p; μ, Σ)` without allocation, via the precomputed `Λ` and `ln det Σ`.
+pub(crate) fn log_normal<const D: usize>(
+    p: &SVector<f64, D>,
+    mu: &SVector<f64, D>,
+    lambda_mat: &SMatrix<f64, D, D>,
+    ln_det: f64,
+) -> f64 {
+    let e = p - mu;
+    -0.5 * (D as f64 * (2.0 * std::f64::consts::PI).ln() + ln_det + e.dot(&(lambda_mat * e)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix2, Vector2};
+
+    fn g() -> Gaussian<2> {
+        Gaussian::new(Vector2::new(1.0, -2.0), Matrix2::new(2.0, 0.6, 0.6, 1.5))
+    }
+
+    fn log_f(th: &DVector<f64>, p: &Vector2<f64>) -> f64 {
+        let g = Gaussian::<2>::from_theta(th);
+        let l = g.cov.try_inverse().unwrap();
+        log_normal(p, &g.mean, &l, g.cov.determinant().ln())
+    }
+
+    #[test]
+    fn theta_round_trip_and_r() {
+        assert_eq!(Gaussian::<2>::R, 5);
+        let th = g().theta();
+        assert_eq!(th.as_slice(), &[1.0, -2.0, 2.0, 1.5, 0.6]);
+        assert_eq!(Gaussian::<2>::from_theta(&th), g());
+    }
+
+    #[test]
+    fn score_and_hessian_match_finite_differences() {
+        let p = Vector2::new(2.3, -0.4);
+        let th = g().theta();
+        let mut d = Derivatives::new(&g()).unwrap();
+        let mut s = DVector::zeros(5);
+        d.score(&p, &mut s);
+        let mut h = DMatrix::zeros(5, 5);
+        d.accumulate_hessian(&p, 1.0, &mut h);
+        // Central differences: truncation O(ε_h²·f''') ≈ 1e-8, round-off O(ε/ε_h) ≈ 1e-11
+        // for the gradient; the second differences of log f have round-off
+        // O(ε/ε_h²) ≈ 2e-8; 1e-6 leaves margin for both.
+        let eps = 1e-4;
+        for a in 0..5 {
+            let mut tp = th.clone();
+            tp[a] += eps;
+            let mut tm = th.clone();
+            tm[a] -= eps;
+            let fd = (log_f(&tp, &p) - log_f(&tm, &p)) / (2.0 * eps);
+            assert!((fd - s[a]).abs() < 1e-6, "score {a}: {fd} vs {}", s[a]);
+            for b in 0..5 {
+                let mut tpp = tp.clone();
+                tpp[b] += eps;
+                let mut tpm = tp.clone();
+                tpm[b] -= eps;
+                let mut tmp = tm.clone();
+                tmp[b] += eps;
+                let mut tmm = tm.clone();
+                tmm[b] -= eps;
+                let fd2 = (log_f(&tpp, &p) - log_f(&tpm, &p) - log_f(&tmp, &p) + log_f(&tmm, &p))
+                    / (4.0 * eps * eps);
+                assert!(
+                    (-fd2 - h[(a, b)]).abs() < 1e-5,
+                    "N[{a},{b}]: {} vs {}",
+                    -fd2,
+                    h[(a, b)]
+                );
+            }
+        }
+    }
+}

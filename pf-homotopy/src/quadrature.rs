@@ -1,0 +1,465 @@
+//! Grid approximations of the intractable integrals (25), (26) and (28).
+//!
+//! Every integral the homotopy needs has the form `∫ φ(p) g(y|p)^λ N(p; m, P) dp`: for the
+//! HΔE with `N(m, P)` the prior `f(·; θ_{k|k−1})` and λ the current homotopy value (eq. (7)),
+//! for the AHΔE with `N(m, P) = f(·; θ_k(λ_i))` and `λ = 0` (eqs. (27)–(28)). A
+//! [`TemperedQuadrature`] returns nodes `p_j` with log-weights
+//! `log w_j ≈ log(cell volume) + log N(p_j; m, P) + λ log g(y|p_j)` and the values
+//! `log g(y|p_j)` that (26) and (28) multiply by.
+//!
+//! - [`PolarGrid`] is the paper's choice for bearings-only tracking: a change of variables
+//!   to polar coordinates `p = ρ + r (cos β, sin β)` centred on the observer, `dp = r dr dβ`,
+//!   then a grid. In these coordinates the bearing likelihood depends on β alone, so the
+//!   β-grid can follow the likelihood's width `σ/√λ`, and along each ray the Gaussian is a
+//!   one-dimensional Gaussian in `r` whose own mean and width place that ray's `r`-grid.
+//! - [`WhitenedGrid`] is a tensor midpoint grid in the whitened coordinates of `N(m, P)`,
+//!   for any likelihood no sharper than the Gaussian (used for the linear-Gaussian checks).
+
+use nalgebra::{SMatrix, SVector, Vector2};
+use serde::{Deserialize, Serialize};
+
+use crate::angle::wrap;
+use crate::error::{HomotopyError, Result, check_positive};
+use crate::param::{Gaussian, log_normal};
+
+const LN_2PI: f64 = 1.837_877_066_409_345_5;
+
+/// Quadrature nodes, reused from one call to the next (no allocation once grown).
+#[derive(Debug, Clone, Default)]
+pub struct Nodes<const D: usize> {
+    /// `p_j`.
+    pub points: Vec<SVector<f64, D>>,
+    /// `log w_j`, including the `g^λ` factor; unnormalised.
+    pub log_w: Vec<f64>,
+    /// `log g(y | p_j)`.
+    pub log_g: Vec<f64>,
+    /// Normalised weights `w_j / Σ w`, filled by [`Nodes::normalise`].
+    pub w: Vec<f64>,
+}
+
+impl<const D: usize> Nodes<D> {
+    /// Empty node set.
+    pub fn new() -> Self {
+        Self {
+            points: Vec::new(),
+            log_w: Vec::new(),
+            log_g: Vec::new(),
+            w: Vec::new(),
+        }
+    }
+
+    /// Forget the nodes, keeping the capacity.
+    pub fn clear(&mut self) {
+        self.points.clear();
+        self.log_w.clear();
+        self.log_g.clear();
+        self.w.clear();
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Whether there are no nodes.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Add a node.
+    pub fn push(&mut self, p: SVector<f64, D>, log_w: f64, log_g: f64) {
+        self.points.push(p);
+        self.log_w.push(log_w);
+        self.log_g.push(log_g);
+    }
+
+    /// Fill [`Nodes::w`] with the normalised weights; returns `log Σ_j w_j`, the log of the
+    /// integral `∫ g^λ N dp`. `k`, `lambda` label the error.
+    pub fn normalise(&mut self, k: usize, lambda: f64) -> Result<f64> {
+        if self.is_empty() {
+            return Err(HomotopyError::DegenerateQuadrature { k, lambda });
+        }
+        self.w.resize(self.log_w.len(), 0.0);
+        let mut lw = std::mem::take(&mut self.log_w);
+        let res = pf_core::weights::normalise(k, &mut lw, &mut self.w);
+        // `normalise` rewrote `lw` to normalised logs; restore the unnormalised values.
+        if let Ok(c) = res {
+            for l in lw.iter_mut() {
+                *l += c;
+            }
+        }
+        self.log_w = lw;
+        match res {
+            Ok(c) => Ok(c),
+            Err(pf_core::CoreError::AllWeightsZero { .. }) => {
+                Err(HomotopyError::DegenerateQuadrature { k, lambda })
+            }
+            Err(e) => Err(e.into()),
+        }
+    }
+
+    /// `Σ_j w_j φ(p_j)` with the normalised weights.
+    pub fn expect(&self, phi: impl Fn(&SVector<f64, D>) -> f64) -> f64 {
+        self.points
+            .iter()
+            .zip(&self.w)
+            .map(|(p, w)| w * phi(p))
+            .sum()
+    }
+}
+
+/// A rule for `∫ φ(p) g(y|p)^λ N(p; m, P) dp`; see the module docs.
+pub trait TemperedQuadrature<const D: usize> {
+    /// Clear `nodes` and fill them for the Gaussian `base` and homotopy value `lambda`.
+    ///
+    /// # Errors
+    /// A `base` covariance that is not positive definite.
+    fn fill(&self, base: &Gaussian<D>, lambda: f64, nodes: &mut Nodes<D>) -> Result<()>;
+
+    /// `log g(y | p)`.
+    fn log_likelihood(&self, p: &SVector<f64, D>) -> f64;
+}
+
+/// Resolution of the observer-centred polar grid.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PolarGridConfig {
+    /// Number of bearing nodes `n_β`.
+    pub n_bearing: usize,
+    /// Number of range nodes `n_r` on each ray.
+    pub n_range: usize,
+    /// Half-width of the grid in standard deviations (of the Gaussian along each ray, of
+    /// and of the bearing cone of the Gaussian seen from the observer).
+    pub n_sigma: f64,
+}
+
+impl Default for PolarGridConfig {
+    /// 48 × 24 nodes over ±5 standard deviations (the paper does not give its grid; see
+    /// the README and the grid ablation).
+    fn default() -> Self {
+        Self {
+            n_bearing: 48,
+            n_range: 24,
+            n_sigma: 5.0,
+        }
+    }
+}
+
+impl PolarGridConfig {
+    /// Check the resolution.
+    pub fn validate(&self) -> Result<()> {
+        if self.n_bearing < 2 {
+            return Err(HomotopyError::InvalidParameter {
+                name: "n_bearing",
+                value: self.n_bearing as f64,
+                reason: "the bearing grid needs at least 2 nodes",
+            });
+        }
+        if self.n_range < 2 {
+            return Err(HomotopyError::InvalidParameter {
+                name: "n_range",
+                value: self.n_range as f64,
+                reason: "the range grid needs at least 2 nodes",
+            });
+        }
+        check_positive("n_sigma", self.n_sigma)
+    }
+}
+
+/// The paper's polar-coordinate grid for a bearing measurement `y ~ N(h(p, ρ), σ²)`.
+#[derive(Debug, Clone)]
+pub struct PolarGrid {
+    /// Scratch of the bearing pre-grid.
+    pre: std::cell::RefCell<Vec<f64>>,
+    /// Resolution.
+    pub config: PolarGridConfig,
+    /// Observer position ρ = (ξ, ζ).
+    pub rho: [f64; 2],
+    /// The bearing `y_k`.
+    pub y: f64,
+    /// Bearing noise standard deviation σ.
+    pub sigma: f64,
+}
+
+/// Bearing extent of the `c`-σ ellipse of `g` seen from `rho`: `(β_c, lo, hi)` with the
+/// interval `[β_c + lo, β_c + hi]`, or `None` when `rho` lies inside the ellipse.
+fn bearing_extent(
+    g: &Gaussian<2>,
+    l: &SMatrix<f64, 2, 2>,
+    lambda_mat: &SMatrix<f64, 2, 2>,
+    rho: [f64; 2],
+    c: f64,
+) -> Option<(f64, f64, f64)> {
+    let d = g.mean - Vector2::new(rho[0], rho[1]);
+    if d.dot(&(lambda_mat * d)) <= c * c {
+        return None;
+    }
+    let bc = d[1].atan2(d[0]);
+    // The ellipse is convex and excludes ρ, so its extreme bearings lie on its outline;
+    // 256 outline points place them within a chord error of cos(π/256) ≈ 1 − 7.5e-5 of the
+    // true tangent, which the 2 % padding below covers.
+    const M: usize = 256;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..M {
+        let t = std::f64::consts::TAU * i as f64 / M as f64;
+        let q = d + c * l * Vector2::new(t.cos(), t.sin());
+        let db = wrap(q[1].atan2(q[0]) - bc);
+        lo = lo.min(db);
+        hi = hi.max(db);
+    }
+    let pad = 0.02 * (hi - lo);
+    Some((bc, lo - pad, hi + pad))
+}
+
+impl PolarGrid {
+    /// The grid for measurement `y` from observer `rho`.
+    pub fn new(config: PolarGridConfig, rho: [f64; 2], y: f64, sigma: f64) -> Self {
+        Self {
+            pre: std::cell::RefCell::new(Vec::new()),
+            config,
+            rho,
+            y,
+            sigma,
+        }
+    }
+
+    /// `log g(y | β) = log N(wrap(y − β); 0, σ²)`, eq. (21), as a function of the bearing β.
+    pub fn log_g_bearing(&self, beta: f64) -> f64 {
+        let e = wrap(self.y - beta) / self.sigma;
+        -0.5 * (LN_2PI + e * e) - self.sigma.ln()
+    }
+}
+
+impl TemperedQuadrature<2> for PolarGrid {
+    fn log_likelihood(&self, p: &SVector<f64, 2>) -> f64 {
+        self.log_g_bearing((p[1] - self.rho[1]).atan2(p[0] - self.rho[0]))
+    }
+
+    fn fill(&self, base: &Gaussian<2>, lambda: f64, nodes: &mut Nodes<2>) -> Result<()> {
+        nodes.clear();
+        let cfg = self.config;
+        let c = cfg.n_sigma;
+        let l = base.chol().ok_or(pf_core::CoreError::NotPositiveDefinite {
+            what: "polar grid base covariance",
+            pivot: 0,
+            value: base.cov[(0, 0)],
+        })?;
+        let lambda_mat = base
+            .cov
+            .try_inverse()
+            .ok_or(pf_core::CoreError::NotPositiveDefinite {
+                what: "polar grid base covariance",
+                pivot: 1,
+                value: base.cov.determinant(),
+            })?;
+        let ln_det = 2.0 * (l[(0, 0)] * l[(1, 1)]).ln();
+        let rho = Vector2::new(self.rho[0], self.rho[1]);
+        let d = base.mean - rho;
+        // Bearing interval: where the bearing marginal of g^λ·N has its mass. Candidates are
+        // the Gaussian's c-σ cone seen from ρ (the whole circle when ρ is inside the
+        // ellipse); on a fine pre-grid over them, the marginal is
+        // m_λ(β) = g(β)^λ ∫_0^∞ r N(ρ + r u_β) dr, in closed form.
+        let extent = bearing_extent(base, &l, &lambda_mat, self.rho, c);
+        let (centre, lo0, hi0, n_pre) = match extent {
+            Some((bc, lo, hi)) => (bc, lo, hi, 256),
+            None => (
+                d[1].atan2(d[0]),
+                -std::f64::consts::PI,
+                std::f64::consts::PI,
+                2048,
+            ),
+        };
+        let dd = d.dot(&(lambda_mat * d));
+        let log_ray_mass = |beta: f64| -> f64 {
+            let u = Vector2::new(beta.cos(), beta.sin());
+            let lu = lambda_mat * u;
+            let a = u.dot(&lu);
+            let b = lu.dot(&d);
+            let (r_star, s_r) = (b / a, a.sqrt().recip());
+            // ∫_0^∞ r exp(−(r − r*)²/2s²) dr = s² e^{−x²/2} + r* s √(2π) Φ(x), x = r*/s.
+            let x = r_star / s_r;
+            let i = s_r * s_r * (-0.5 * x * x).exp()
+                + r_star
+                    * s_r
+                    * (2.0 * std::f64::consts::PI).sqrt()
+                    * 0.5
+                    * erfc(-x / std::f64::consts::SQRT_2);
+            -0.5 * (dd - b * b / a) + i.max(f64::MIN_POSITIVE).ln()
+        };
+        let h_pre = (hi0 - lo0) / n_pre as f64;
+        let mut best = (f64::NEG_INFINITY, 0usize);
+        let pre = &mut *self.pre.borrow_mut();
+        pre.clear();
+        for i in 0..n_pre {
+            let beta = centre + lo0 + (i as f64 + 0.5) * h_pre;
+            let v = log_ray_mass(beta) + lambda * self.log_g_bearing(beta);
+            if v > best.0 {
+                best = (v, i);
+            }
+            pre.push(v);
+        }
+        if !best.0.is_finite() {
+            return Err(HomotopyError::DegenerateQuadrature { k: 0, lambda });
+        }
+        // Bearing nodes by a change of variables β = β(u), u uniform: midpoints in u of the
+        // placement density q ∝ m_λ^{1/2} (piecewise constant on the pre-grid), node
+        // spacing Δβ_j = Δu / q(β_j). The square root spreads nodes into the tails and over
+        // secondary mass (when ρ is inside the ellipse, part of the Gaussian lies behind the
+        // observer, all around it) while keeping most of them on the main lobe.
+        let mut total = 0.0;
+        for v in pre.iter_mut() {
+            *v = (0.5 * (*v - best.0)).exp() * h_pre;
+            total += *v;
+        }
+        let nb = cfg.n_bearing;
+        let du = total / nb as f64;
+        let (mut cell, mut acc) = (0usize, 0.0);
+        for ib in 0..nb {
+            let u_target = (ib as f64 + 0.5) * du;
+            while cell + 1 < n_pre && acc + pre[cell] < u_target {
+                acc += pre[cell];
+                cell += 1;
+            }
+            let frac = ((u_target - acc) / pre[cell]).clamp(0.0, 1.0);
+            let beta = centre + lo0 + (cell as f64 + frac) * h_pre;
+            let db = du * h_pre / pre[cell];
+            let u = Vector2::new(beta.cos(), beta.sin());
+            // Along the ray ρ + r u: (p − m)ᵀΛ(p − m) = a r² − 2 b r + dᵀΛd.
+            let lu = lambda_mat * u;
+            let a = u.dot(&lu);
+            let b = lu.dot(&d);
+            let r_star = b / a;
+            let s_r = a.sqrt().recip();
+            let r_lo = (r_star - c * s_r).max(0.0);
+            let r_hi = r_star + c * s_r;
+            if r_hi <= 0.0 {
+                continue;
+            }
+            let log_g = self.log_g_bearing(beta);
+            let dr = (r_hi - r_lo) / cfg.n_range as f64;
+            for ir in 0..cfg.n_range {
+                let r = r_lo + (ir as f64 + 0.5) * dr;
+                let q = -0.5 * (a * r * r - 2.0 * b * r + dd);
+                let log_n = -LN_2PI - 0.5 * ln_det + q;
+                let lw = (r * dr * db).ln() + log_n + lambda * log_g;
+                nodes.push(rho + r * u, lw, log_g);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Resolution of the whitened tensor grid.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WhitenedGridConfig {
+    /// Nodes per dimension.
+    pub n: usize,
+    /// Half-width in standard deviations.
+    pub n_sigma: f64,
+}
+
+impl Default for WhitenedGridConfig {
+    fn default() -> Self {
+        Self {
+            n: 64,
+            n_sigma: 7.0,
+        }
+    }
+}
+
+/// A tensor midpoint grid in the whitened coordinates `z` of `N(m, P)`, `p = m + L z`,
+/// `z ∈ [−c, c]^D`, for a likelihood given as a closure `log g(y | p)`.
+pub struct WhitenedGrid<const D: usize, G> {
+    /// Resolution.
+    pub config: WhitenedGridConfig,
+    /// `p ↦ log g(y | p)`.
+    pub log_g: G,
+}
+
+impl<const D: usize, G: Fn(&SVector<f64, D>) -> f64 + Sync> TemperedQuadrature<D>
+    for WhitenedGrid<D, G>
+{
+    fn log_likelihood(&self, p: &SVector<f64, D>) -> f64 {
+        (self.log_g)(p)
+    }
+
+    fn fill(&self, base: &Gaussian<D>, lambda: f64, nodes: &mut Nodes<D>) -> Result<()> {
+        nodes.clear();
+        let l = base.chol().ok_or(pf_core::CoreError::NotPositiveDefinite {
+            what: "whitened grid base covariance",
+            pivot: 0,
+            value: base.cov[(0, 0)],
+        })?;
+        let n = self.config.n;
+        let c = self.config.n_sigma;
+        let h = 2.0 * c / n as f64;
+        let ln_det_l: f64 = (0..D).map(|i| l[(i, i)].ln()).sum();
+        let log_cell = D as f64 * h.ln() + ln_det_l;
+        let total = n.pow(D as u32);
+        let mut idx = [0usize; 16];
+        for _ in 0..total {
+            let mut z = SVector::<f64, D>::zeros();
+            for i in 0..D {
+                z[i] = -c + (idx[i] as f64 + 0.5) * h;
+            }
+            let p = base.mean + l * z;
+            let log_n = -0.5 * D as f64 * LN_2PI - ln_det_l - 0.5 * z.norm_squared();
+            let lg = (self.log_g)(&p);
+            nodes.push(p, log_cell + log_n + lambda * lg, lg);
+            for slot in idx.iter_mut().take(D) {
+                *slot += 1;
+                if *slot < n {
+                    break;
+                }
+                *slot = 0;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Mean and covariance of `N(m, P)` restricted to the nodes, as `log N` would give them:
+/// used to check a rule (eq. (25) at λ = 0 reduces to these moments).
+pub fn node_moments<const D: usize>(nodes: &Nodes<D>) -> (SVector<f64, D>, SMatrix<f64, D, D>) {
+    let mut m = SVector::<f64, D>::zeros();
+    for (p, w) in nodes.points.iter().zip(&nodes.w) {
+        m += *w * p;
+    }
+    let mut c = SMatrix::<f64, D, D>::zeros();
+    for (p, w) in nodes.points.iter().zip(&nodes.w) {
+        let e = p - m;
+        c += *w * e * e.transpose();
+    }
+    (m, c)
+}
+
+/// `log N(p; g)` for a Gaussian `g`, or NaN if its covariance is singular.
+pub fn log_density<const D: usize>(g: &Gaussian<D>, p: &SVector<f64, D>) -> f64 {
+    match (g.cov.try_inverse(), g.chol()) {
+        (Some(lm), Some(l)) => {
+            let ln_det = 2.0 * (0..D).map(|i| l[(i, i)].ln()).sum::<f64>();
+            log_normal(p, &g.mean, &lm, ln_det)
+        }
+        _ => f64::NAN,
+    }
+}
+
+/// The complementary error function, `erfc(x) = 1 − erf(x)`, to a relative error below
+/// 1.2·10⁻⁷ everywhere (Chebyshev fit of W. H. Press et al., *Numerical Recipes*, 2nd ed.,
+/// §6.2, `erfcc`). Used only to place the bearing grid, where this accuracy is ample; no
+/// workspace dependency provides it.
+pub fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let poly = -z * z - 1.265_512_23
+        + t * (1.000_023_68
+            + t * (0.374_091_96
+                + t * (0.096_784_18
+                    + t * (-0.186_288_06
+                        + t * (0.278_868_07
+                            + t * (-1.135_203_98
+                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
+    let r = t * poly.exp();
+    if x >= 0.0 { r } else { 2.0 - r }
+}

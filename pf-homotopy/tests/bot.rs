@@ -1,0 +1,285 @@
+//! Checks of the BOT instance: polar-grid quadrature, PF importance weights, UKF-LPC against
+//! a Cartesian UKF, observability of the scenario, validation and the CLI JSON shapes.
+
+use nalgebra::DMatrix;
+use nalgebra::{Matrix2, Matrix4, Vector2, Vector4};
+use pf_core::mc::stream_rng;
+use pf_core::{Proposal, StateSpaceModel, TransitionDensity};
+use pf_homotopy::HomotopyError;
+use pf_homotopy::angle::{bearing, wrap};
+use pf_homotopy::filters::pf::{BotModel, LinearisedOptimal};
+use pf_homotopy::filters::ukf_lpc::{CartesianUkf, UkfLpc};
+use pf_homotopy::model::ScenarioConfig;
+use pf_homotopy::param::{Derivatives, Gaussian};
+use pf_homotopy::quadrature::{
+    Nodes, PolarGrid, PolarGridConfig, TemperedQuadrature, node_moments,
+};
+
+/// Relative error of the polar-grid moments against the Gaussian's own, for λ = 0.
+fn moment_errors(g: &Gaussian<2>, rho: [f64; 2]) -> (f64, f64, f64) {
+    let quad = PolarGrid::new(PolarGridConfig::default(), rho, 0.3, 0.02);
+    let mut nodes = Nodes::new();
+    quad.fill(g, 0.0, &mut nodes).unwrap();
+    let log_z = nodes.normalise(0, 0.0).unwrap();
+    let (m, c) = node_moments(&nodes);
+    let sd = g.cov.diagonal().map(f64::sqrt);
+    let mean_err = ((m - g.mean).component_div(&sd)).amax();
+    let cov_err = (c - g.cov).amax() / g.cov.amax();
+    (log_z.abs(), mean_err, cov_err)
+}
+
+#[test]
+fn polar_grid_reproduces_gaussian_moments() {
+    // The integrals at λ = 0 must reproduce ∫f = 1, ∫p f = μ, ∫(p − μ)(p − μ)ᵀ f = Σ, for
+    // the geometries the filter meets: far and compact, elongated along the line of sight,
+    // and the observer inside the ellipse (the prior at k = 2, part of whose mass lies
+    // behind the observer). Tolerances: the bearing nodes are midpoints of a piecewise-
+    // constant change of variables (second order, spacing ≲ σ_β/10) and the range nodes
+    // midpoints over ±5σ (truncation 6e-7): both give ≲ 1e-3 relative moment errors; the
+    // bounds below are 2–5× that. The total mass is the weakest when the observer is inside
+    // the ellipse: the ≈ 1.5 % of mass behind the observer is spread over all bearings and
+    // covered by a few coarse nodes, measured at ≈ 0.6 % error, hence 1e-2.
+    let cases = [
+        (
+            Gaussian::new(
+                Vector2::new(3000.0, 4000.0),
+                Matrix2::new(400.0, 100.0, 100.0, 900.0),
+            ),
+            [0.0, 0.0],
+        ),
+        (
+            Gaussian::new(
+                Vector2::new(1000.0, 5000.0),
+                Matrix2::new(2.0e5, 9.0e5, 9.0e5, 5.0e6),
+            ),
+            [0.0, 0.0],
+        ),
+        (
+            Gaussian::new(
+                Vector2::new(1418.7, 7770.9),
+                Matrix2::new(427104.2, 2157854.3, 2157854.3, 11857503.0),
+            ),
+            [108.9, -108.9],
+        ),
+    ];
+    for (g, rho) in cases {
+        let (lz, me, ce) = moment_errors(&g, rho);
+        assert!(lz < 1e-2, "mass {lz}");
+        assert!(me < 5e-3, "mean error {me} sd");
+        assert!(ce < 5e-3, "covariance error {ce}");
+    }
+}
+
+#[test]
+fn closed_form_fisher_matches_quadrature_of_eq_25_at_lambda_zero() {
+    // At λ = 0 and θ = θ(0), (25) is the Fisher information (27) — a check of both the
+    // derivatives and the grid. Same error budget as the moment test.
+    let g = Gaussian::new(
+        Vector2::new(1000.0, 5000.0),
+        Matrix2::new(2.0e5, 9.0e5, 9.0e5, 5.0e6),
+    );
+    let quad = PolarGrid::new(PolarGridConfig::default(), [0.0, 0.0], 0.3, 0.02);
+    let mut nodes = Nodes::new();
+    quad.fill(&g, 0.0, &mut nodes).unwrap();
+    nodes.normalise(0, 0.0).unwrap();
+    let mut d = Derivatives::new(&g).unwrap();
+    let mut h = DMatrix::zeros(5, 5);
+    for (p, w) in nodes.points.iter().zip(&nodes.w) {
+        d.accumulate_hessian(p, *w, &mut h);
+    }
+    let mut f = DMatrix::zeros(5, 5);
+    d.fisher(&mut f);
+    for i in 0..5 {
+        for j in 0..5 {
+            let scale = (f[(i, i)] * f[(j, j)]).sqrt();
+            assert!(
+                (h[(i, j)] - f[(i, j)]).abs() < 1e-2 * scale,
+                "H[{i},{j}] {} vs {}",
+                h[(i, j)],
+                f[(i, j)]
+            );
+        }
+    }
+}
+
+#[test]
+fn linearised_optimal_weights_equal_the_predictive_density() {
+    // When h is linear over the proposal's spread, the linearised optimal density is the
+    // optimal one and g·f/q = p(y_k | x_{k−1}) = N(y; h(F x_{k−1}), H Q Hᵀ + σ²) for every
+    // draw. Here the spread is √Q ≈ 0.06 m at 5 km: the curvature term of h is
+    // ~(0.3 m / 5 km)² ≈ 4e-9 rad, which moves log w by ≲ |e|·4e-9/σ² ≈ 1e-5; 1e-4 bounds
+    // it. The target sits on the ±π cut, so the weights are right only if residuals wrap.
+    let sc = ScenarioConfig::default();
+    let model = BotModel::new(&sc, vec![[0.0, 0.0]; 3], 0.0).unwrap();
+    let x_prev = Vector4::new(-5000.0, 0.5, -10.0, 3.0);
+    let xb = sc.f() * x_prev;
+    let y = wrap(bearing([xb[0], xb[1]], [0.0, 0.0]) + 0.015);
+    let r2 = xb[0] * xb[0] + xb[1] * xb[1];
+    let h = nalgebra::RowVector4::new(-xb[1] / r2, xb[0] / r2, 0.0, 0.0);
+    let s = (h * sc.q_matrix() * h.transpose())[(0, 0)] + sc.sigma().powi(2);
+    let e = wrap(y - bearing([xb[0], xb[1]], [0.0, 0.0]));
+    let want = -0.5 * ((2.0 * std::f64::consts::PI * s).ln() + e * e / s);
+    let mut rng = stream_rng(3, 0);
+    for _ in 0..200 {
+        let x = LinearisedOptimal.sample(&model, 1, &x_prev, None, Some(&y), &mut rng);
+        let lw = model.log_likelihood(1, &x, &y)
+            + model.log_transition_density(1, &x_prev, &x, None)
+            - LinearisedOptimal.log_density(&model, 1, &x_prev, &x, None, Some(&y));
+        assert!((lw - want).abs() < 1e-4, "{lw} vs {want}");
+    }
+}
+
+#[test]
+fn ukf_lpc_agrees_with_cartesian_ukf_when_nearly_linear() {
+    // A tight prior (5 m, 0.5 m/s) at 5 km: over ±√8 sigma-point spreads the bearing map is
+    // linear to ~(15/5000)² ≈ 1e-5 relative, so both UKFs are the same Kalman filter up to
+    // that: their Cartesian means must agree to ≪ the posterior s.d. (≥ 1 m); we allow 0.1 m.
+    let sc = ScenarioConfig::default();
+    let real = sc.simulate(&mut stream_rng(11, 0)).unwrap();
+    let m = real.target[0] + Vector4::new(4.0, -3.0, 0.2, -0.3);
+    let p = Matrix4::from_diagonal(&Vector4::new(25.0, 25.0, 0.25, 0.25));
+    let mut lpc = UkfLpc::from_cartesian(&sc, Default::default(), m, p, &real.observer[0]).unwrap();
+    let mut cart = CartesianUkf::new(&sc, Default::default(), m, p).unwrap();
+    for k in 1..25 {
+        lpc.predict(&real.observer[k - 1], &real.observer[k])
+            .unwrap();
+        lpc.update(real.bearings[k]).unwrap();
+        cart.predict().unwrap();
+        cart.update(real.bearings[k], real.observer[k].pos).unwrap();
+        let a = lpc.cartesian_mean(&real.observer[k]).unwrap();
+        let b = &cart.state.m;
+        let d = (0..2).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max);
+        assert!(d < 0.1, "k = {k}: {a} vs {b}");
+    }
+}
+
+#[test]
+fn target_becomes_observable_only_after_the_manoeuvre() {
+    // Before the turn, the ghost o_k + α(x_k − o_k) of the nominal track is a constant-
+    // velocity path with exactly the same bearings, for any α: range is unobservable. During
+    // and after the turn the ghost must accelerate, which no CV target does: its second
+    // differences exceed the process noise scale (√q ≈ 0.1 m/s² per step) by far.
+    let sc = ScenarioConfig::default();
+    let o = sc.observer_track();
+    let x = sc.nominal_target();
+    let alpha = 1.5;
+    let ghost: Vec<Vector2<f64>> = (0..x.len())
+        .map(|k| {
+            let ok = Vector2::new(o[k].pos[0], o[k].pos[1]);
+            ok + alpha * (Vector2::new(x[k][0], x[k][1]) - ok)
+        })
+        .collect();
+    for k in 0..x.len() {
+        let b1 = bearing([x[k][0], x[k][1]], o[k].pos);
+        let b2 = bearing([ghost[k][0], ghost[k][1]], o[k].pos);
+        assert!(wrap(b1 - b2).abs() < 1e-12);
+    }
+    let acc = |k: usize| (ghost[k + 1] - 2.0 * ghost[k] + ghost[k - 1]).norm();
+    for k in 1..12 {
+        assert!(acc(k) < 1e-8, "k = {k}: {}", acc(k));
+    }
+    for k in 13..16 {
+        assert!(acc(k) > 10.0, "k = {k}: {}", acc(k));
+    }
+}
+
+#[test]
+fn invalid_inputs_are_errors_not_panics() {
+    let sc = ScenarioConfig {
+        sigma_deg: -1.0,
+        ..ScenarioConfig::default()
+    };
+    assert!(matches!(
+        sc.validate(),
+        Err(HomotopyError::InvalidParameter {
+            name: "sigma_deg",
+            ..
+        })
+    ));
+    let sc = ScenarioConfig {
+        n_samples: 1,
+        ..ScenarioConfig::default()
+    };
+    assert!(matches!(
+        sc.validate(),
+        Err(HomotopyError::TooFewObservations { got: 1, needed: 2 })
+    ));
+    let sc = ScenarioConfig::default();
+    let mut real = sc.simulate(&mut stream_rng(0, 0)).unwrap();
+    real.bearings[4] = f64::NAN;
+    let err = pf_homotopy::filters::track(
+        pf_homotopy::filters::Algorithm::Ohf,
+        &sc,
+        &Default::default(),
+        &real,
+        &mut stream_rng(0, 1),
+    );
+    assert!(matches!(
+        err,
+        Err(HomotopyError::NonFiniteData {
+            what: "bearing",
+            k: 5,
+            ..
+        })
+    ));
+    let cfg = pf_homotopy::experiments::EllipsesConfig {
+        step: 99,
+        ..Default::default()
+    };
+    assert!(matches!(
+        pf_homotopy::experiments::ellipses(&cfg),
+        Err(HomotopyError::InvalidParameter { .. })
+    ));
+    let mut cfg = pf_homotopy::experiments::RmseConfig {
+        realisations: 0,
+        ..Default::default()
+    };
+    assert!(pf_homotopy::experiments::rmse(&cfg).is_err());
+    cfg.realisations = 1;
+    cfg.filters.particles = 0;
+    assert!(pf_homotopy::experiments::rmse(&cfg).is_err());
+}
+
+#[test]
+fn ellipses_json_has_the_cli_shape_and_concentrate_over_lambda() {
+    let res = pf_homotopy::experiments::ellipses(&Default::default()).unwrap();
+    let v = serde_json::to_value(&res).unwrap();
+    let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
+    assert_eq!(keys, ["ellipses", "lambda", "truth"]);
+    let e = &v["ellipses"][0];
+    let mut ek: Vec<&String> = e.as_object().unwrap().keys().collect();
+    ek.sort();
+    assert_eq!(ek, ["angle", "center", "semi_axes"]);
+    assert_eq!(res.lambda, [0.0, 0.25, 0.5, 0.75, 1.0]);
+    // Fig. 2: the ellipses shrink as λ grows (the area of a Gaussian's ellipse is
+    // ∝ √det Σ, and tempering by g^λ only adds information).
+    let area: Vec<f64> = res
+        .ellipses
+        .iter()
+        .map(|e| e.semi_axes[0] * e.semi_axes[1])
+        .collect();
+    for w in area.windows(2) {
+        assert!(w[1] < w[0], "{area:?}");
+    }
+}
+
+#[test]
+fn rmse_json_has_the_cli_shape() {
+    let mut cfg =
+        pf_homotopy::experiments::RmseConfig::at_scale(pf_homotopy::experiments::Scale::Quick);
+    cfg.realisations = 1;
+    cfg.filters.particles = 200;
+    cfg.scenario.n_samples = 4;
+    let res = pf_homotopy::experiments::rmse(&cfg).unwrap();
+    let v = serde_json::to_value(&res).unwrap();
+    let mut keys: Vec<&String> = v.as_object().unwrap().keys().collect();
+    keys.sort();
+    assert_eq!(keys, ["rmse", "seconds_per_run", "time"]);
+    for part in ["rmse", "seconds_per_run"] {
+        let mut k: Vec<&String> = v[part].as_object().unwrap().keys().collect();
+        k.sort();
+        assert_eq!(k, ["AOHF", "OHF", "PF", "UKF-LPC"]);
+    }
+    assert_eq!(res.time, [0.0, 1.0, 2.0, 3.0]);
+    assert!(res.rmse.ohf.iter().all(|v| v.is_finite()));
+}
