@@ -19,8 +19,8 @@
 //! | §3, eqs. (18)–(22): model; §4: scenario (Fig. 1) | [`model`] |
 //! | §4: prior from the first bearing | [`prior`] |
 //! | §3: OHF tracker (prediction, position homotopy, conditioning) | [`filters::ohf_tracker`] |
-//! | §4: UKF-LPC benchmark (refs. [2], [8]) | [`filters::ukf_lpc`] |
-//! | §4: PF with the linearised optimal importance density (ref. [3]) | [`filters::pf`] |
+//! | §4: UKF-LPC benchmark (refs. \[2\], \[8\]) | [`filters::ukf_lpc`] |
+//! | §4: PF with the linearised optimal importance density (ref. \[3\]) | [`filters::pf`] |
 //! | §4: Figs. 1–3, cost, ablations | [`experiments`] |
 //! | bearings, wrapping | [`angle`] |
 //!

@@ -1,5 +1,5 @@
-//! The UKF in log-polar coordinates (UKF-LPC), the paper's first benchmark (its refs. [2],
-//! [8]), and a Cartesian UKF for comparison.
+//! The UKF in log-polar coordinates (UKF-LPC), the paper's first benchmark (its refs. \[2\],
+//! \[8\]), and a Cartesian UKF for comparison.
 //!
 //! The belief is Gaussian in the log-polar coordinates of the target *relative to the
 //! observer*, `z = [β, ln r, β̇, ṙ/r]` (Brehard & Le Cadre): the bearing is the first
