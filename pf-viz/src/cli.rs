@@ -22,6 +22,21 @@ pub enum Command {
     /// Measure the speed of the engine on this machine.
     #[command(subcommand)]
     Bench(BenchCommand),
+    /// Cappé & Moulines: smoothed sum functionals, EM, SEM and the score.
+    #[command(subcommand)]
+    Smooth(crate::cmd::smooth::SmoothCommand),
+    /// Karlsson, Schön & Gustafsson: marginalized particle filter and its complexity.
+    #[command(subcommand)]
+    Mpf(crate::cmd::mpf::MpfCommand),
+    /// Morelande et al.: optimal homotopy filter for bearings-only tracking.
+    #[command(subcommand)]
+    Homotopy(crate::cmd::homotopy::HomotopyCommand),
+    /// Babuška et al.: overflow losses of a hopper dredger.
+    #[command(subcommand)]
+    Dredge(crate::cmd::dredge::DredgeCommand),
+    /// El Abed et al.: energetic particle filter for multiple targets.
+    #[command(subcommand)]
+    Epf(crate::cmd::epf::EpfCommand),
 }
 
 /// `pf-viz bench …`.
@@ -66,6 +81,16 @@ pub struct ReportArgs {
     /// Master seed; every section derives its random streams from it.
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
+    /// How much Monte Carlo work to do.
+    #[arg(long, value_enum, default_value_t = Scale::Default)]
+    pub scale: Scale,
+    /// Run only these sections (comma-separated), e.g. `smooth,epf`.
+    #[arg(long, value_name = "SECTIONS", value_delimiter = ',')]
+    pub only: Vec<String>,
+    /// Worker threads for Monte Carlo replications (default: all cores). Results do not
+    /// depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub jobs: Option<u32>,
     /// Do not write Rerun `.rrd` recordings.
     #[arg(long)]
     pub no_rrd: bool,

@@ -9,6 +9,7 @@
 //! |---|---|
 //! | [`cli`] | the clap command line |
 //! | [`bench`](mod@bench) | `pf-viz bench bootstrap` |
+//! | [`cmd`] | the paper subcommands, one module per paper |
 //! | [`data`] | reading observation CSV files |
 //! | [`report`] | `pf-viz report`: the registry of sections, one file per paper |
 //! | [`png`] | plot kinds, each a function from plain data to a PNG |
@@ -18,6 +19,7 @@
 
 pub mod bench;
 pub mod cli;
+pub mod cmd;
 pub mod data;
 pub mod error;
 pub mod io;
@@ -60,5 +62,10 @@ pub fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+        Command::Smooth(c) => cmd::smooth::run(c),
+        Command::Mpf(c) => cmd::mpf::run(c),
+        Command::Homotopy(c) => cmd::homotopy::run(c),
+        Command::Dredge(c) => cmd::dredge::run(c),
+        Command::Epf(c) => cmd::epf::run(c),
     }
 }

@@ -68,14 +68,30 @@ fn check_png(path: &Path) {
 fn report_writes_figures_recording_and_summary() {
     let s = Scratch::new("report");
     let out = s.0.join("nested/out");
-    let o = pf_viz(&["report", "--out", out.to_str().unwrap(), "--seed", "7"]);
+    let o = pf_viz(&[
+        "report",
+        "--out",
+        out.to_str().unwrap(),
+        "--seed",
+        "7",
+        "--only",
+        "core",
+        "--scale",
+        "quick",
+    ]);
     assert!(
         o.status.success(),
         "stderr: {}",
         String::from_utf8_lossy(&o.stderr)
     );
 
-    let mut expected = vec!["ess.png", "genealogy.png", "summary.json"];
+    let mut expected = vec![
+        "REPORT.md",
+        "ess.png",
+        "genealogy.png",
+        "index.html",
+        "summary.json",
+    ];
     if cfg!(feature = "rrd") {
         expected.push("genealogy.rrd");
         expected.sort_unstable();
@@ -118,12 +134,25 @@ fn report_writes_figures_recording_and_summary() {
 }
 
 #[test]
-fn same_seed_same_numbers() {
+fn same_seed_same_numbers_whatever_the_jobs() {
     let s = Scratch::new("determinism");
     let (a, b) = (s.0.join("a"), s.0.join("b"));
-    for d in [&a, &b] {
-        let o = pf_viz(&["report", "--out", d.to_str().unwrap(), "--no-rrd"]);
-        assert!(o.status.success());
+    for (d, jobs) in [(&a, "1"), (&b, "2")] {
+        let o = pf_viz(&[
+            "report",
+            "--out",
+            d.to_str().unwrap(),
+            "--no-rrd",
+            "--scale",
+            "quick",
+            "--jobs",
+            jobs,
+        ]);
+        assert!(
+            o.status.success(),
+            "stderr: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
     }
     assert_eq!(
         fs::read(a.join("summary.json")).unwrap(),

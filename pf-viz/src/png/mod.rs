@@ -8,11 +8,21 @@
 //! |---|---|
 //! | [`genealogy`] | particle genealogy (Cappé & Moulines, Fig. 1) |
 //! | [`line`](mod@line) | line plot with optional shaded bands and reference lines |
+//! | [`boxplot`] | box plots per group, with reference lines |
+//! | [`histogram`] | histograms with summary statistics |
+//! | [`rec`] | REC curves |
+//! | [`xy`] | the plane with equal axes: paths, points, rays, ellipses |
+//! | [`table`] | tables as images |
 //! | [`style`] | the shared look: size, font, colours, dash patterns |
 
+pub mod boxplot;
 pub mod genealogy;
+pub mod histogram;
 pub mod line;
+pub mod rec;
 pub mod style;
+pub mod table;
+pub mod xy;
 
 use std::path::Path;
 
@@ -34,9 +44,21 @@ pub fn render_png<F>(path: &Path, draw: F) -> Result<()>
 where
     F: FnOnce(&Canvas<'_>) -> Result<()>,
 {
+    render_png_sized(path, style::SIZE, draw)
+}
+
+/// [`render_png`] at `size` (width, height) px, for figures whose size follows their content
+/// (tables).
+///
+/// # Errors
+/// As [`render_png`].
+pub fn render_png_sized<F>(path: &Path, size: (u32, u32), draw: F) -> Result<()>
+where
+    F: FnOnce(&Canvas<'_>) -> Result<()>,
+{
     style::init_fonts()?;
     write_atomic_path(path, |tmp| {
-        let root = BitMapBackend::new(tmp, style::SIZE).into_drawing_area();
+        let root = BitMapBackend::new(tmp, size).into_drawing_area();
         root.fill(&WHITE).map_err(style::plot_err(path))?;
         draw(&root)?;
         // `present` encodes the PNG; an error here must not be lost in `drop`.

@@ -15,7 +15,7 @@ use pf_core::observe::{CloudRecorder, EssRecorder, GenealogyRecorder};
 use pf_core::resample::Resampler;
 use serde::{Deserialize, Serialize};
 
-use super::{Context, Section, to_json};
+use super::{Context, Figure, Section, SectionReport, to_json};
 use crate::error::{Result, VizError};
 use crate::png;
 use crate::png::genealogy::{GenealogyData, GenealogyLabels};
@@ -26,7 +26,7 @@ use crate::png::style::LegendPos;
 pub const SECTION: Section = Section {
     name: "core",
     title: "engine: particle genealogy of a bootstrap filter",
-    run: run_json,
+    run: run_section,
 };
 
 const NAME: &str = "core";
@@ -96,9 +96,35 @@ pub struct CoreResult {
     pub files: Vec<String>,
 }
 
-fn run_json(ctx: &Context<'_>) -> Result<serde_json::Value> {
+fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     let result = run(ctx, CoreConfig::default())?;
-    to_json(ctx, &result)
+    let n = result.config.filter.n_particles;
+    Ok(SectionReport {
+        result: to_json(ctx, &result)?,
+        figures: vec![
+            Figure {
+                file: "genealogy.png".into(),
+                caption: format!(
+                    "Genealogy of a bootstrap filter with N = {n} particles on the noisy AR(1) \
+                     model (cf. Cappé & Moulines, Fig. 1): grey paths died out, black paths \
+                     are ancestors of the final particles; the line marks their coalescence."
+                ),
+            },
+            Figure {
+                file: "ess.png".into(),
+                caption: "Effective sample size after reweighting, and the number of distinct \
+                          ancestors of the final particles at each step (path degeneracy)."
+                    .into(),
+            },
+        ],
+        files: result
+            .files
+            .iter()
+            .filter(|f| f.ends_with(".rrd"))
+            .cloned()
+            .collect(),
+        ..SectionReport::default()
+    })
 }
 
 /// Run the experiment with `config` and write its files.

@@ -1,16 +1,24 @@
 //! `pf-viz report`: run every section and assemble `summary.json`.
 //!
-//! A section is one paper (plus [`core`], the engine's own demo). It runs its experiment,
-//! writes its figures and recordings into the output directory and returns a serde result
-//! struct holding every number behind them. Adding a paper = one file in `report/` plus one
-//! line in [`SECTIONS`].
+//! A section is one paper (plus [`core`], the engine's own demo). It runs its experiments,
+//! writes its figures and recordings into the output directory and returns a
+//! [`SectionReport`]: every number behind them (for `summary.json`), plus the captions,
+//! tables and notes that `index.html` and `REPORT.md` show. Adding a paper = one file in
+//! `report/` plus one line in [`SECTIONS`].
 
 pub mod core;
+pub mod dredge;
+pub mod epf;
+pub mod homotopy;
+pub mod mpf;
+pub mod smooth;
+
+mod page;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
 
 use crate::cli::{ReportArgs, RrdOutput, Scale};
@@ -18,10 +26,21 @@ use crate::error::{Result, VizError};
 use crate::io::{prepare_out_dir, write_json};
 
 /// Every report section, in the order they run and appear in `summary.json`.
-pub const SECTIONS: &[Section] = &[core::SECTION];
+pub const SECTIONS: &[Section] = &[
+    core::SECTION,
+    smooth::SECTION,
+    mpf::SECTION,
+    homotopy::SECTION,
+    dredge::SECTION,
+    epf::SECTION,
+];
 
 /// File name of the summary in the output directory.
 pub const SUMMARY: &str = "summary.json";
+/// File name of the self-contained HTML report.
+pub const INDEX: &str = "index.html";
+/// File name of the Markdown report.
+pub const MARKDOWN: &str = "REPORT.md";
 
 /// One report section.
 #[derive(Debug, Clone, Copy)]
@@ -30,8 +49,48 @@ pub struct Section {
     pub name: &'static str,
     /// Human-readable title.
     pub title: &'static str,
-    /// Run the section: write its files, return its result as JSON.
-    pub run: fn(&Context<'_>) -> Result<serde_json::Value>,
+    /// Run the section: write its files, return its numbers and captions.
+    pub run: fn(&Context<'_>) -> Result<SectionReport>,
+}
+
+/// What a section hands back: the numbers for `summary.json` and the captions, tables and
+/// notes for `index.html` / `REPORT.md`.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct SectionReport {
+    /// Every number behind the section's figures and tables, with the config and seed.
+    pub result: serde_json::Value,
+    /// The figures written, in reading order.
+    pub figures: Vec<Figure>,
+    /// Tables, each with the paper's values beside ours where the paper has them.
+    pub tables: Vec<Table>,
+    /// Where our results differ from the paper's, and why; also choices the paper left open.
+    pub notes: Vec<String>,
+    /// Other files written (`.rrd` recordings, CSV), relative to the output directory.
+    pub files: Vec<String>,
+}
+
+/// A figure of the report: a PNG in the output directory and its caption.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Figure {
+    /// File name relative to the output directory, e.g. `smooth-fig2-n500.png`.
+    pub file: String,
+    /// What the figure shows, with the paper's figure number.
+    pub caption: String,
+}
+
+/// A table of the report. Cells are preformatted strings; put the paper's value in its own
+/// column (e.g. `"N (paper)"`) so ours and theirs sit side by side.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Table {
+    /// Short id, unique within the section; the table is also rendered to
+    /// `<section>-<id>.png`.
+    pub id: String,
+    /// What the table shows, with the paper's table number.
+    pub caption: String,
+    /// Column headings.
+    pub header: Vec<String>,
+    /// Rows, each as long as `header`.
+    pub rows: Vec<Vec<String>>,
 }
 
 /// What every section gets to know about the run.
@@ -45,6 +104,36 @@ pub struct Context<'a> {
     pub scale: Scale,
     /// Whether to write `.rrd` recordings.
     pub rrd: RrdOutput,
+    /// Progress bars on stderr.
+    pub progress: &'a Progress,
+}
+
+/// Progress bars on stderr, one per experiment, drawn only when stderr is a terminal.
+/// Nothing ever goes to stdout.
+#[derive(Debug, Default)]
+pub struct Progress {
+    multi: MultiProgress,
+}
+
+impl Progress {
+    /// Bars drawn on stderr (hidden when it is not a terminal).
+    pub fn new() -> Self {
+        Progress {
+            multi: MultiProgress::with_draw_target(ProgressDrawTarget::stderr()),
+        }
+    }
+
+    /// A new bar of `len` units labelled `label`, with an ETA; finish it with
+    /// `finish_and_clear`.
+    pub fn bar(&self, label: &str, len: u64) -> ProgressBar {
+        let style =
+            ProgressStyle::with_template("{prefix:>18} [{bar:30}] {pos}/{len} {msg} (eta {eta})")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> ");
+        let bar = self.multi.add(ProgressBar::new(len).with_style(style));
+        bar.set_prefix(label.to_owned());
+        bar
+    }
 }
 
 impl Context<'_> {
@@ -87,42 +176,88 @@ pub struct Summary {
     pub sections: BTreeMap<&'static str, serde_json::Value>,
 }
 
-/// Run every section into `args.out` and write `summary.json` last.
+/// The sections `--only` selects, in registry order; all of them when it is empty.
 ///
-/// The output directory is created and probed first, so an unwritable `--out` fails before
-/// any work is done.
+/// # Errors
+/// [`VizError::Argument`] naming an unknown section and listing the known ones.
+pub fn select(only: &[String]) -> Result<Vec<&'static Section>> {
+    for name in only {
+        if !SECTIONS.iter().any(|s| s.name == name.trim()) {
+            let known: Vec<&str> = SECTIONS.iter().map(|s| s.name).collect();
+            return Err(VizError::Argument {
+                message: format!(
+                    "--only: unknown section {:?}; known sections are {}",
+                    name,
+                    known.join(",")
+                ),
+            });
+        }
+    }
+    Ok(SECTIONS
+        .iter()
+        .filter(|s| only.is_empty() || only.iter().any(|n| n.trim() == s.name))
+        .collect())
+}
+
+/// Run the selected sections into `args.out`, then write `summary.json`, `index.html` and
+/// `REPORT.md`.
+///
+/// The arguments are checked and the output directory is created and probed first, so bad
+/// arguments or an unwritable `--out` fail before any work is done. `--jobs` sizes the rayon
+/// pool the Monte Carlo replications run on; results do not depend on it.
 ///
 /// # Errors
 /// The first failing section's error, or an I/O error naming the path at fault.
 pub fn run(args: &ReportArgs) -> Result<Summary> {
+    let selected = select(&args.only)?;
     prepare_out_dir(&args.out)?;
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(jobs) = args.jobs {
+        pool = pool.num_threads(jobs as usize);
+    }
+    let pool = pool.build().map_err(|e| VizError::Argument {
+        message: format!("--jobs: cannot start the worker threads: {e}"),
+    })?;
+    pool.install(|| run_sections(args, &selected))
+}
+
+fn run_sections(args: &ReportArgs, selected: &[&'static Section]) -> Result<Summary> {
+    let progress = Progress::new();
     let ctx = Context {
         out_dir: &args.out,
         seed: args.seed,
-        scale: Scale::Default,
+        scale: args.scale,
         rrd: RrdOutput::from_flag(args.no_rrd),
+        progress: &progress,
     };
-    // Drawn only on a terminal; redirected stderr stays clean.
-    let bar = ProgressBar::new(SECTIONS.len() as u64).with_style(
-        ProgressStyle::with_template("{pos}/{len} {wide_msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    let mut sections = BTreeMap::new();
-    for s in SECTIONS {
-        bar.set_message(s.title);
-        sections.insert(s.name, (s.run)(&ctx)?);
-        bar.inc(1);
+    let overall = progress.bar("report", selected.len() as u64);
+    let mut reports = Vec::with_capacity(selected.len());
+    for s in selected {
+        overall.set_message(s.title);
+        let mut report = (s.run)(&ctx)?;
+        for t in &report.tables {
+            let file = format!("{}-{}.png", s.name, t.id);
+            crate::png::table::render(&ctx.path(&file), t)?;
+            report.files.push(file);
+        }
+        reports.push((**s, report));
+        overall.inc(1);
     }
-    bar.finish_and_clear();
+    overall.finish_and_clear();
     let summary = Summary {
         tool: "pf-viz",
         version: env!("CARGO_PKG_VERSION"),
         seed: ctx.seed,
         scale: ctx.scale,
         rrd: ctx.rrd,
-        sections,
+        sections: reports
+            .iter()
+            .map(|(s, r)| (s.name, r.result.clone()))
+            .collect(),
     };
     write_json(&ctx.path(SUMMARY), &summary)?;
+    page::write_html(&ctx.path(INDEX), &summary, &reports)?;
+    page::write_markdown(&ctx.path(MARKDOWN), &summary, &reports)?;
     Ok(summary)
 }
 

@@ -7,8 +7,21 @@
 //! | module | recording |
 //! |---|---|
 //! | [`genealogy`] | particle genealogy and ESS trace |
+//! | [`smooth`] | `smooth.rrd`: genealogy on `step`, SEM chains on `iteration` |
+//! | [`mpf`] | `mpf.rrd`: particle clouds and KF means per partition on `step` |
+//! | [`homotopy`] | `homotopy.rrd`: ellipses on `lambda`; scenario and estimates on `step` |
+//! | [`dredge`] | `dredge.rrd`: signals and the (Q_o, ρ_o) cloud on `time` |
+//! | [`epf`] | `epf.rrd`: detections, clouds, associations, gates on `frame` |
+//!
+//! Entity paths start with the paper's name (`smooth/genealogy/lineage_3`,
+//! `homotopy/ellipse/lambda`).
 
+pub mod dredge;
+pub mod epf;
 pub mod genealogy;
+pub mod homotopy;
+pub mod mpf;
+pub mod smooth;
 
 use std::path::Path;
 
@@ -20,8 +33,16 @@ use crate::io::write_atomic_path;
 /// The application id of every pf-viz recording.
 pub const APP_ID: &str = "pf";
 
-/// The timeline every logger uses: the filter's time index `k`.
+/// The filter's time index `k`.
 pub const STEP: &str = "step";
+/// The homotopy parameter λ ∈ [0, 1].
+pub const LAMBDA: &str = "lambda";
+/// An EM / SEM iteration.
+pub const ITERATION: &str = "iteration";
+/// Physical time in seconds.
+pub const TIME: &str = "time";
+/// A video frame index.
+pub const FRAME: &str = "frame";
 
 /// Map a Rerun error to [`VizError::Rrd`] for the recording at `path`.
 pub fn rrd_err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> VizError + '_ {

@@ -1,0 +1,1 @@
+//! Box plots: one box per group (quartiles, 1.5 IQR whiskers, outliers), with labelled horizontal reference lines.

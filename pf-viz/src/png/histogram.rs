@@ -1,0 +1,1 @@
+//! Histograms of samples, with mean, standard deviation and max |·| annotated.

@@ -1,0 +1,1 @@
+//! Plots in the plane with equal axes: paths, points, segments (bearing rays) and error ellipses.
