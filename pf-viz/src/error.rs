@@ -64,6 +64,15 @@ pub enum VizError {
         #[source]
         source: serde_json::Error,
     },
+    /// A paper crate rejected its input or failed during a run.
+    #[error("{paper}: {source}")]
+    Paper {
+        /// The paper (`smooth`, `mpf`, `homotopy`, `dredge`, `epf`).
+        paper: &'static str,
+        /// The paper crate's own error.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync + 'static>,
+    },
     /// plotters failed to draw or encode a figure.
     #[error("{}: cannot draw figure: {message}", path.display())]
     Plot {
@@ -94,6 +103,17 @@ impl VizError {
     /// Wrap an engine error raised in `section`.
     pub fn core(section: &'static str) -> impl Fn(CoreError) -> VizError + Copy {
         move |source| VizError::Core { section, source }
+    }
+
+    /// Wrap an error of the paper crate `paper`.
+    pub fn paper<E>(paper: &'static str) -> impl Fn(E) -> VizError + Copy
+    where
+        E: std::error::Error + Send + Sync + 'static,
+    {
+        move |source| VizError::Paper {
+            paper,
+            source: Box::new(source),
+        }
     }
 
     /// Wrap an I/O error on `path`.
