@@ -290,19 +290,18 @@ fn draw(
                     }
                 }
             };
-        let legend_marker: Option<Marker>;
-        match &layer.kind {
+        let legend_marker = match &layer.kind {
             LayerKind::Path(p) => {
                 let pts: Vec<(f64, f64)> = p.iter().map(|q| (q[0], q[1])).collect();
                 chart.draw_series(dashed(pts)).map_err(&err)?;
-                legend_marker = None;
+                None
             }
             LayerKind::Segments(s) => {
                 let elems = s
                     .iter()
                     .flat_map(|[a, b]| dashed(vec![(a[0], a[1]), (b[0], b[1])]));
                 chart.draw_series(elems).map_err(&err)?;
-                legend_marker = None;
+                None
             }
             LayerKind::Ellipses(e) => {
                 let elems = e.iter().flat_map(|e| {
@@ -315,7 +314,7 @@ fn draw(
                     dashed(pts)
                 });
                 chart.draw_series(elems).map_err(&err)?;
-                legend_marker = None;
+                None
             }
             LayerKind::Points(p) => {
                 let marker = if look.marker == Marker::None {
@@ -339,7 +338,7 @@ fn draw(
                             .map_err(&err)?;
                     }
                 }
-                legend_marker = Some(marker);
+                Some(marker)
             }
             LayerKind::Labels(l) => {
                 let font = style::text(f.tick).pos(Pos::new(HPos::Left, VPos::Bottom));
@@ -351,7 +350,7 @@ fn draw(
                     .map_err(&err)?;
                 continue;
             }
-        }
+        };
         if layer.name.is_empty() {
             continue;
         }
