@@ -88,7 +88,12 @@ fn every_png_decodes_and_is_not_blank() {
             100.0 * frac
         );
         let shades: BTreeSet<[u8; 3]> = img.pixels().map(|px| px.0).collect();
-        assert!(shades.len() > 4, "{} has {} colours", p.display(), shades.len());
+        assert!(
+            shades.len() > 4,
+            "{} has {} colours",
+            p.display(),
+            shades.len()
+        );
     }
 }
 
@@ -101,7 +106,8 @@ fn every_recording_loads_in_the_official_rerun_tools() {
     let rrds = files(dir, "rrd");
     for p in PAPERS {
         assert!(
-            rrds.iter().any(|r| r.file_name().unwrap() == format!("{p}.rrd").as_str()),
+            rrds.iter()
+                .any(|r| r.file_name().unwrap() == format!("{p}.rrd").as_str()),
             "no {p}.rrd among {rrds:?}"
         );
     }
@@ -147,11 +153,17 @@ fn pages_carry_every_figure_and_need_no_network() {
             );
         }
     }
-    assert!(html.contains("data:image/png;base64,"), "figures are embedded");
+    assert!(
+        html.contains("data:image/png;base64,"),
+        "figures are embedded"
+    );
     for banned in ["<script", "http://", "https://", "<link"] {
         assert!(!html.contains(banned), "index.html contains {banned}");
     }
     for p in PAPERS {
-        assert!(html.contains(&format!("id=\"{p}\"")), "index.html lacks {p}");
+        assert!(
+            html.contains(&format!("id=\"{p}\"")),
+            "index.html lacks {p}"
+        );
     }
 }
