@@ -18,8 +18,7 @@
 //! | Section 5: model, `τ_{n,1…4}`, updates (10)–(12), Fisher's identity | [`ar1`] |
 //! | exact EM / score from the Kalman filter and RTS smoother | [`exact`] |
 //! | SEM (Fig. 4) and Monte Carlo EM | [`em`] |
-//! | `pf-viz smooth em|sem|score` | [`cli`] |
-//! | Figs. 1–4 and the lag sweep | [`experiments`] |
+//! | the experiments behind `pf-viz smooth em|sem|score` and the figures | [`experiments`] |
 //!
 //! ```
 //! use pf_core::filter::ParticleFilter;
@@ -51,7 +50,6 @@
 //!   using the EM algorithm", *J. Time Series Analysis* 3(4), 1982.
 
 pub mod ar1;
-pub mod cli;
 pub mod em;
 pub mod error;
 pub mod exact;

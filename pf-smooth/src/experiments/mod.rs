@@ -1,1 +1,362 @@
-//! Experiments.
+//! The paper's experiments as functions from data and a serde configuration to a serde
+//! result: replicated EM updates (Figs. 2–3), SEM chains over exact EM (Fig. 4), the
+//! Fisher-identity score, and the lag sweep (not in the paper).
+//!
+//! Each function takes the observations `Y_0…Y_n` and a configuration, validates both, and
+//! returns data whose JSON is the `pf-viz smooth em|sem|score` contract. Replication `r`
+//! (or chain `c`) uses the stream `(seed, r)`, so results do not depend on the thread count.
+
+use crate::ar1::{Ar1Data, Ar1Statistics, SuffStats, Theta, ThetaSamples};
+use crate::fixed_lag::FixedLag;
+use crate::path_space::PathSpace;
+use pf_core::filter::ParticleFilter;
+use pf_core::observe::{Observer, StepView};
+use crate::em::{
+    Estimator, ParticleSchedule, StochasticEm, paper_filter_config, particle_statistics,
+};
+use crate::error::{Result, at_least_one};
+use crate::exact::{exact_em, exact_em_step, exact_statistics};
+use pf_core::mc::{Par, try_replicate};
+use serde::{Deserialize, Serialize};
+
+/// Arguments of `pf-viz smooth em`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EmExperiment {
+    /// Current φ.
+    pub phi: f64,
+    /// Current σ (standard deviation).
+    pub sigma: f64,
+    /// Current ρ (standard deviation).
+    pub rho: f64,
+    /// Particles N.
+    pub particles: usize,
+    /// Replications R.
+    pub replications: usize,
+    /// Lag δ of the fixed-lag estimator, if wanted.
+    pub lag: Option<usize>,
+    /// Seed; replication r uses stream (seed, r).
+    pub seed: u64,
+}
+
+impl Default for EmExperiment {
+    /// The paper's Fig. 3 setting: θ = (0.8, 0.5², 2²), N = 100, δ = 20, 100 replications.
+    fn default() -> Self {
+        EmExperiment {
+            phi: 0.8,
+            sigma: 0.5,
+            rho: 2.0,
+            particles: 100,
+            replications: 100,
+            lag: Some(20),
+            seed: 0,
+        }
+    }
+}
+
+impl EmExperiment {
+    /// Check σ, ρ > 0, φ finite, N, R ≥ 1, δ ≥ 1.
+    ///
+    /// # Errors
+    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
+    pub fn validate(&self) -> Result<Theta> {
+        let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
+        at_least_one("particles", self.particles)?;
+        at_least_one("replications", self.replications)?;
+        if let Some(d) = self.lag {
+            at_least_one("lag", d)?;
+        }
+        Ok(theta)
+    }
+}
+
+/// Output of `smooth em`: `{"n", "exact", "joint", "fixed_lag"?}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EmResult {
+    /// n (there are n + 1 observations).
+    pub n: usize,
+    /// The exact EM update (10)–(12) from the given θ.
+    pub exact: Theta,
+    /// The update with the joint estimator, per replication.
+    pub joint: ThetaSamples,
+    /// The update with the fixed-lag estimator (same particle runs), only with a lag.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fixed_lag: Option<ThetaSamples>,
+}
+
+/// One EM update (10)–(12) from θ, exact and with R independent particle estimates.
+///
+/// # Errors
+/// Bad data or arguments, a filter failure, or a degenerate update (first failing
+/// replication).
+pub fn em(y: &[f64], cfg: &EmExperiment) -> Result<EmResult> {
+    let theta = cfg.validate()?;
+    let data = Ar1Data::from_slice(y)?;
+    let exact = exact_em_step(&data, &theta)?;
+    let filter = paper_filter_config(cfg.particles);
+    let reps = try_replicate(cfg.seed, cfg.replications, Par::Rayon, |_, rng| {
+        let (j, f) = particle_statistics(&data, &theta, filter, cfg.lag, rng)?;
+        Ok::<_, crate::SmoothError>((j.m_step()?, f.map(|f| f.m_step()).transpose()?))
+    })?;
+    let joint: Vec<Theta> = reps.iter().map(|r| r.0).collect();
+    let fixed: Option<Vec<Theta>> = reps.iter().map(|r| r.1).collect();
+    Ok(EmResult {
+        n: data.n(),
+        exact,
+        joint: ThetaSamples::from_thetas(&joint),
+        fixed_lag: cfg.lag.and(fixed).map(|f| ThetaSamples::from_thetas(&f)),
+    })
+}
+
+/// Arguments of `pf-viz smooth sem`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SemExperiment {
+    /// Starting φ.
+    pub phi: f64,
+    /// Starting σ.
+    pub sigma: f64,
+    /// Starting ρ.
+    pub rho: f64,
+    /// Particles N per iteration.
+    pub particles: usize,
+    /// Iterations I.
+    pub iterations: usize,
+    /// Independent chains C.
+    pub chains: usize,
+    /// Seed; chain c uses stream (seed, c).
+    pub seed: u64,
+}
+
+impl Default for SemExperiment {
+    /// Fig. 4: N = 25, 50 iterations, 4 chains, from θ = (0.8, 0.5², 2²).
+    fn default() -> Self {
+        SemExperiment {
+            phi: 0.8,
+            sigma: 0.5,
+            rho: 2.0,
+            particles: 25,
+            iterations: 50,
+            chains: 4,
+            seed: 0,
+        }
+    }
+}
+
+impl SemExperiment {
+    /// Check σ, ρ > 0, φ finite, N, C ≥ 1.
+    ///
+    /// # Errors
+    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
+    pub fn validate(&self) -> Result<Theta> {
+        let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
+        at_least_one("particles", self.particles)?;
+        at_least_one("chains", self.chains)?;
+        Ok(theta)
+    }
+}
+
+/// Output of `smooth sem`: `{"exact": [θ per iteration], "sem": [[θ per iteration] per chain]}`,
+/// each trajectory starting with the starting point.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SemResult {
+    /// The exact EM trajectory θ_0…θ_I.
+    pub exact: Vec<Theta>,
+    /// One SEM trajectory θ_0…θ_I per chain.
+    pub sem: Vec<Vec<Theta>>,
+}
+
+/// SEM chains (joint estimator, fixed N) over the exact EM trajectory, as in Fig. 4.
+///
+/// # Errors
+/// Bad data or arguments, or the first failing chain (with its iteration).
+pub fn sem(y: &[f64], cfg: &SemExperiment) -> Result<SemResult> {
+    let theta = cfg.validate()?;
+    let data = Ar1Data::from_slice(y)?;
+    let exact = exact_em(&data, &theta, cfg.iterations)?;
+    let algo = StochasticEm {
+        particles: ParticleSchedule::Fixed(cfg.particles),
+        estimator: Estimator::Joint,
+        iterations: cfg.iterations,
+    };
+    let sem = try_replicate(cfg.seed, cfg.chains, Par::Rayon, |c, rng| {
+        algo.run(&data, &theta, c, rng)
+    })?;
+    Ok(SemResult { exact, sem })
+}
+
+/// Arguments of `pf-viz smooth score`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScoreExperiment {
+    /// φ at which to evaluate the score.
+    pub phi: f64,
+    /// σ.
+    pub sigma: f64,
+    /// ρ.
+    pub rho: f64,
+    /// Particles N.
+    pub particles: usize,
+    /// Replications R.
+    pub replications: usize,
+    /// Seed; replication r uses stream (seed, r).
+    pub seed: u64,
+}
+
+impl Default for ScoreExperiment {
+    /// The current estimate of Figs. 2–3, N = 100, 100 replications.
+    fn default() -> Self {
+        ScoreExperiment {
+            phi: 0.8,
+            sigma: 0.5,
+            rho: 2.0,
+            particles: 100,
+            replications: 100,
+            seed: 0,
+        }
+    }
+}
+
+impl ScoreExperiment {
+    /// Check σ, ρ > 0, φ finite, N, R ≥ 1.
+    ///
+    /// # Errors
+    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
+    pub fn validate(&self) -> Result<Theta> {
+        let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
+        at_least_one("particles", self.particles)?;
+        at_least_one("replications", self.replications)?;
+        Ok(theta)
+    }
+}
+
+/// Output of `smooth score`: `{"exact": ∇ℓ, "particle": {"phi": [R], "sigma2": [R], "rho2": [R]}}`,
+/// gradients with respect to (φ, σ², ρ²).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScoreResult {
+    /// The exact score (Fisher's identity with Kalman/RTS statistics).
+    pub exact: Theta,
+    /// The particle score (joint estimator) per replication.
+    pub particle: ThetaSamples,
+}
+
+/// The score `∇ℓ_n(θ)` by Fisher's identity, exact and from R particle runs.
+///
+/// # Errors
+/// Bad data or arguments, or a filter failure.
+pub fn score(y: &[f64], cfg: &ScoreExperiment) -> Result<ScoreResult> {
+    let theta = cfg.validate()?;
+    let data = Ar1Data::from_slice(y)?;
+    let exact = exact_statistics(&data, &theta)?.score(&theta);
+    let filter = paper_filter_config(cfg.particles);
+    let reps = try_replicate(cfg.seed, cfg.replications, Par::Rayon, |_, rng| {
+        Ok::<_, crate::SmoothError>(
+            particle_statistics(&data, &theta, filter, None, rng)?
+                .0
+                .score(&theta),
+        )
+    })?;
+    Ok(ScoreResult {
+        exact,
+        particle: ThetaSamples::from_thetas(&reps),
+    })
+}
+
+/// The lag sweep (not in the paper): the fixed-lag updates (10)–(12) for a list of lags δ,
+/// all from the same particle runs, against the exact update.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LagSweep {
+    /// Current φ.
+    pub phi: f64,
+    /// Current σ.
+    pub sigma: f64,
+    /// Current ρ.
+    pub rho: f64,
+    /// Particles N.
+    pub particles: usize,
+    /// Replications R.
+    pub replications: usize,
+    /// The lags δ (each ≥ 1).
+    pub lags: Vec<usize>,
+    /// Seed; replication r uses stream (seed, r).
+    pub seed: u64,
+}
+
+/// Output of [`lag_sweep`]: per lag, the updates over the replications.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LagSweepResult {
+    /// n.
+    pub n: usize,
+    /// The exact EM update.
+    pub exact: Theta,
+    /// The lags δ, as given.
+    pub lags: Vec<usize>,
+    /// The fixed-lag update per lag (same order as `lags`), per replication.
+    pub fixed_lag: Vec<ThetaSamples>,
+    /// The joint update from the same runs (the limit δ → ∞).
+    pub joint: ThetaSamples,
+}
+
+/// Many fixed-lag estimators fed by one filter run.
+struct Lags<'a>(Vec<FixedLag<f64, Ar1Statistics<'a>>>);
+
+impl Observer<f64> for Lags<'_> {
+    fn on_step(&mut self, view: &StepView<'_, f64>) {
+        for f in &mut self.0 {
+            f.on_step(view);
+        }
+    }
+}
+
+/// Run the lag sweep.
+///
+/// # Errors
+/// Bad data or configuration (a lag of 0, no lags), a filter failure or a degenerate update.
+pub fn lag_sweep(y: &[f64], cfg: &LagSweep) -> Result<LagSweepResult> {
+    let theta = Theta::from_std(cfg.phi, cfg.sigma, cfg.rho)?;
+    at_least_one("particles", cfg.particles)?;
+    at_least_one("replications", cfg.replications)?;
+    at_least_one("number of lags", cfg.lags.len())?;
+    for &d in &cfg.lags {
+        at_least_one("lag", d)?;
+    }
+    let data = Ar1Data::from_slice(y)?;
+    let n = data.n();
+    let exact = exact_em_step(&data, &theta)?;
+    let filter = paper_filter_config(cfg.particles);
+    let ys = data.filter_input();
+    let reps = try_replicate(cfg.seed, cfg.replications, Par::Rayon, |_, rng| {
+        let stats = Ar1Statistics::new(&data);
+        let mut joint = PathSpace::new(stats);
+        let mut lags = Lags(
+            cfg.lags
+                .iter()
+                .map(|&d| FixedLag::new(stats, d.min(n + 1)))
+                .collect::<Result<_>>()?,
+        );
+        let mut pf = ParticleFilter::bootstrap(theta.model(data.y()[0])?, filter)?;
+        pf.run(&ys, None, rng, &mut (&mut joint, &mut lags))?;
+        let j = SuffStats::from_slice(n, &joint.estimate()?)?.m_step()?;
+        let f = lags
+            .0
+            .iter()
+            .map(|f| SuffStats::from_slice(n, &f.estimate()?)?.m_step())
+            .collect::<Result<Vec<_>>>()?;
+        Ok::<_, crate::SmoothError>((j, f))
+    })?;
+    let joint: Vec<Theta> = reps.iter().map(|r| r.0).collect();
+    let fixed_lag = (0..cfg.lags.len())
+        .map(|l| ThetaSamples::from_thetas(&reps.iter().map(|r| r.1[l]).collect::<Vec<_>>()))
+        .collect();
+    Ok(LagSweepResult {
+        n,
+        exact,
+        lags: cfg.lags.clone(),
+        fixed_lag,
+        joint: ThetaSamples::from_thetas(&joint),
+    })
+}
