@@ -7,16 +7,16 @@
 //! (or chain `c`) uses the stream `(seed, r)`, so results do not depend on the thread count.
 
 use crate::ar1::{Ar1Data, Ar1Statistics, SuffStats, Theta, ThetaSamples};
-use crate::fixed_lag::FixedLag;
-use crate::path_space::PathSpace;
-use pf_core::filter::ParticleFilter;
-use pf_core::observe::{Observer, StepView};
 use crate::em::{
     Estimator, ParticleSchedule, StochasticEm, paper_filter_config, particle_statistics,
 };
 use crate::error::{Result, at_least_one};
 use crate::exact::{exact_em, exact_em_step, exact_statistics};
+use crate::fixed_lag::FixedLag;
+use crate::path_space::PathSpace;
+use pf_core::filter::ParticleFilter;
 use pf_core::mc::{Par, try_replicate};
+use pf_core::observe::{Observer, StepView};
 use serde::{Deserialize, Serialize};
 
 /// Arguments of `pf-viz smooth em`.
