@@ -57,7 +57,6 @@ pub mod experiments;
 pub mod fixed_lag;
 pub mod functional;
 pub mod path_space;
-pub mod summary;
 
 pub use ar1::{Ar1Data, Ar1Statistics, SuffStats, Theta, ThetaSamples};
 pub use error::{Result, SmoothError};

@@ -1,1 +1,345 @@
-//! Box plots: one box per group (quartiles, 1.5 IQR whiskers, outliers), with labelled horizontal reference lines.
+//! Box plots: one or more panels side by side, each with one box per group (quartiles,
+//! whiskers to the furthest value within 1.5·IQR, outliers as points) and labelled
+//! horizontal reference lines (e.g. an exact value the boxes estimate).
+//!
+//! The renderer draws the [`BoxStats`] it is given; [`BoxStats::of`] computes them from a
+//! sample for callers (Tukey's rule with type-7 quartiles, as R's `boxplot` up to the hinge
+//! definition).
+
+use std::path::Path;
+
+use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::line::RefLine;
+use super::style::{self, plot_err};
+use super::{Canvas, render_png};
+use crate::error::{Result, VizError};
+
+/// The numbers one box is drawn from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BoxStats {
+    /// First quartile (bottom of the box).
+    pub q1: f64,
+    /// Median (the bar inside the box).
+    pub median: f64,
+    /// Third quartile (top of the box).
+    pub q3: f64,
+    /// Lowest value ≥ q1 − 1.5·IQR (end of the lower whisker).
+    pub whisker_low: f64,
+    /// Highest value ≤ q3 + 1.5·IQR (end of the upper whisker).
+    pub whisker_high: f64,
+    /// Values beyond the whiskers, drawn as points.
+    pub outliers: Vec<f64>,
+    /// Sample size.
+    pub count: usize,
+    /// Sample mean (not drawn; kept for tables).
+    pub mean: f64,
+}
+
+impl BoxStats {
+    /// Tukey box-plot numbers of `x` (quartiles by linear interpolation, type 7); `None` if
+    /// `x` is empty or holds a non-finite value.
+    pub fn of(x: &[f64]) -> Option<Self> {
+        if x.is_empty() || x.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let mut s = x.to_vec();
+        s.sort_by(f64::total_cmp);
+        let q = |p: f64| {
+            let h = p * (s.len() - 1) as f64;
+            let lo = h.floor() as usize;
+            let hi = h.ceil() as usize;
+            s[lo] + (h - lo as f64) * (s[hi] - s[lo])
+        };
+        let (q1, median, q3) = (q(0.25), q(0.5), q(0.75));
+        let iqr = q3 - q1;
+        let (lo_fence, hi_fence) = (q1 - 1.5 * iqr, q3 + 1.5 * iqr);
+        let inside = |v: &&f64| **v >= lo_fence && **v <= hi_fence;
+        let whisker_low = s.iter().find(inside).copied().unwrap_or(q1);
+        let whisker_high = s.iter().rev().find(inside).copied().unwrap_or(q3);
+        Some(BoxStats {
+            q1,
+            median,
+            q3,
+            whisker_low,
+            whisker_high,
+            outliers: s
+                .iter()
+                .copied()
+                .filter(|v| *v < lo_fence || *v > hi_fence)
+                .collect(),
+            count: s.len(),
+            mean: s.iter().sum::<f64>() / s.len() as f64,
+        })
+    }
+
+    fn range(&self) -> (f64, f64) {
+        self.outliers
+            .iter()
+            .fold((self.whisker_low, self.whisker_high), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            })
+    }
+}
+
+/// One box and its label on the x-axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BoxGroup {
+    /// Label under the box (e.g. `J2`).
+    pub label: String,
+    /// Its numbers.
+    pub stats: BoxStats,
+}
+
+/// One panel: boxes on a common y-axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BoxPanel {
+    /// Panel title.
+    pub title: String,
+    /// x-axis description (what the groups are).
+    pub x_label: String,
+    /// y-axis description, with units.
+    pub y_label: String,
+    /// The boxes, left to right.
+    pub groups: Vec<BoxGroup>,
+    /// Horizontal reference lines, in the legend by their labels.
+    pub ref_lines: Vec<RefLine>,
+}
+
+/// A figure of box-plot panels side by side under one title.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BoxPlot {
+    /// Figure title.
+    pub title: String,
+    /// The panels, left to right.
+    pub panels: Vec<BoxPanel>,
+}
+
+impl BoxPlot {
+    /// Check that there is something to draw and that every number is finite and ordered.
+    ///
+    /// # Errors
+    /// [`VizError::PlotData`] saying what is wrong.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |message: String| VizError::PlotData {
+            what: "box plot",
+            message,
+        };
+        if self.panels.is_empty() {
+            return Err(bad("no panels".into()));
+        }
+        for p in &self.panels {
+            if p.groups.is_empty() {
+                return Err(bad(format!("panel `{}` has no groups", p.title)));
+            }
+            for g in &p.groups {
+                let b = &g.stats;
+                let v = [b.whisker_low, b.q1, b.median, b.q3, b.whisker_high];
+                if v.iter().any(|x| !x.is_finite()) || v.windows(2).any(|w| w[0] > w[1]) {
+                    return Err(bad(format!(
+                        "group `{}` of panel `{}`: non-finite or unordered box numbers",
+                        g.label, p.title
+                    )));
+                }
+            }
+            if p.ref_lines.iter().any(|r| !r.y.is_finite()) {
+                return Err(bad(format!(
+                    "panel `{}`: non-finite reference line",
+                    p.title
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Draw `plot` to the PNG file `path`.
+///
+/// # Errors
+/// Inconsistent data ([`VizError::PlotData`]), or a plot or I/O error naming `path`.
+pub fn render(path: &Path, plot: &BoxPlot) -> Result<()> {
+    plot.validate()?;
+    render_png(path, |root| {
+        let err = plot_err(path);
+        let body = root.titled(&plot.title, style::title()).map_err(&err)?;
+        let areas = body.split_evenly((1, plot.panels.len()));
+        for (area, panel) in areas.iter().zip(&plot.panels) {
+            draw_panel(area, path, panel)?;
+        }
+        Ok(())
+    })
+}
+
+fn draw_panel(area: &Canvas<'_>, path: &Path, p: &BoxPanel) -> Result<()> {
+    let err = plot_err(path);
+    let (lo, hi) = p
+        .groups
+        .iter()
+        .map(|g| g.stats.range())
+        .chain(p.ref_lines.iter().map(|r| (r.y, r.y)))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (c, d)| {
+            (a.min(c), b.max(d))
+        });
+    // Headroom above the data for the legend.
+    let (y_lo, y_hi) = style::padded(lo, hi + 0.25 * (hi - lo), 0.05);
+    let k = p.groups.len();
+    let mut chart = ChartBuilder::on(area)
+        .caption(&p.title, style::text(style::LABEL_PX))
+        .margin(style::MARGIN_PX / 2)
+        .x_label_area_size(style::X_LABEL_AREA_PX)
+        .y_label_area_size(style::Y_LABEL_AREA_PX)
+        .build_cartesian_2d(-0.5..(k as f64 - 0.5), y_lo..y_hi)
+        .map_err(&err)?;
+    let labels: Vec<String> = p.groups.iter().map(|g| g.label.clone()).collect();
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(2 * k + 1)
+        .x_label_formatter(&|x| {
+            let i = x.round();
+            if (x - i).abs() < 1e-6 && i >= 0.0 && (i as usize) < labels.len() {
+                labels[i as usize].clone()
+            } else {
+                String::new()
+            }
+        })
+        .y_label_formatter(&|y| style::tick_label(*y))
+        .x_desc(&p.x_label)
+        .y_desc(&p.y_label)
+        .axis_desc_style(style::text(style::LABEL_PX))
+        .label_style(style::text(style::TICK_PX))
+        .bold_line_style(style::GRID.stroke_width(1))
+        .light_line_style(WHITE.stroke_width(0))
+        .axis_style(style::INK.stroke_width(1))
+        .draw()
+        .map_err(&err)?;
+
+    // Reference lines behind the boxes, so the boxes stay readable where they overlap.
+    for (j, r) in p.ref_lines.iter().enumerate() {
+        let look = style::SERIES[j % style::SERIES.len()];
+        let stroke = look.color.stroke_width(2);
+        chart
+            .draw_series(LineSeries::new(
+                vec![(-0.5, r.y), (k as f64 - 0.5, r.y)],
+                stroke,
+            ))
+            .map_err(&err)?
+            .label(r.label.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 30, y)], stroke));
+    }
+
+    let ink = style::INK.stroke_width(2);
+    let half = 0.28;
+    for (i, g) in p.groups.iter().enumerate() {
+        let x = i as f64;
+        let b = &g.stats;
+        chart
+            .draw_series([
+                Rectangle::new([(x - half, b.q1), (x + half, b.q3)], style::GRID.filled()),
+                Rectangle::new([(x - half, b.q1), (x + half, b.q3)], ink),
+            ])
+            .map_err(&err)?;
+        let segments = [
+            vec![(x - half, b.median), (x + half, b.median)],
+            vec![(x, b.q3), (x, b.whisker_high)],
+            vec![(x, b.q1), (x, b.whisker_low)],
+            vec![
+                (x - half / 2.0, b.whisker_high),
+                (x + half / 2.0, b.whisker_high),
+            ],
+            vec![
+                (x - half / 2.0, b.whisker_low),
+                (x + half / 2.0, b.whisker_low),
+            ],
+        ];
+        chart
+            .draw_series(segments.into_iter().enumerate().map(|(s, pts)| {
+                PathElement::new(
+                    pts,
+                    if s == 0 {
+                        style::INK.stroke_width(4)
+                    } else {
+                        ink
+                    },
+                )
+            }))
+            .map_err(&err)?;
+        chart
+            .draw_series(
+                b.outliers
+                    .iter()
+                    .map(|&v| Circle::new((x, v), 3, style::MID_GREY.stroke_width(1))),
+            )
+            .map_err(&err)?;
+    }
+
+    if !p.ref_lines.is_empty() {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .margin(8)
+            .legend_area_size(36)
+            .label_font(style::text(style::LEGEND_PX))
+            .background_style(WHITE.mix(0.88))
+            .border_style(style::MID_GREY)
+            .draw()
+            .map_err(&err)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tukey_numbers_of_a_known_sample() {
+        // 1..=9 plus 100: q1 = 3.25, median 5.5, q3 = 7.75 (type 7), IQR 4.5, fences
+        // −3.5 and 14.5, so the upper whisker stops at 9 and 100 is an outlier.
+        let x: Vec<f64> = (1..=9).map(f64::from).chain([100.0]).collect();
+        let b = BoxStats::of(&x).unwrap();
+        assert_eq!((b.q1, b.median, b.q3), (3.25, 5.5, 7.75));
+        assert_eq!((b.whisker_low, b.whisker_high), (1.0, 9.0));
+        assert_eq!(b.outliers, vec![100.0]);
+        assert_eq!(b.count, 10);
+        assert!(BoxStats::of(&[]).is_none());
+        assert!(BoxStats::of(&[1.0, f64::NAN]).is_none());
+    }
+
+    #[test]
+    fn renders_a_png_and_rejects_bad_data() {
+        let group = |label: &str, shift: f64| BoxGroup {
+            label: label.into(),
+            stats: BoxStats::of(
+                &(0..50)
+                    .map(|i| shift + f64::from(i).sin())
+                    .chain([shift + 5.0])
+                    .collect::<Vec<_>>(),
+            )
+            .unwrap(),
+        };
+        let mut plot = BoxPlot {
+            title: "test".into(),
+            panels: vec![BoxPanel {
+                title: "φ".into(),
+                x_label: "estimator".into(),
+                y_label: "value (units)".into(),
+                groups: vec![group("J1", 0.0), group("J2", 1.0)],
+                ref_lines: vec![RefLine {
+                    y: 0.5,
+                    label: "exact".into(),
+                }],
+            }],
+        };
+        let path = std::env::temp_dir().join(format!("pf-viz-box-{}.png", std::process::id()));
+        render(&path, &plot).unwrap();
+        let img = image::open(&path).unwrap();
+        assert_eq!((img.width(), img.height()), style::SIZE);
+        let _ = std::fs::remove_file(&path);
+        plot.panels[0].groups[0].stats.q1 = 10.0; // above the median
+        assert!(render(&path, &plot).is_err());
+        plot.panels[0].groups.clear();
+        assert!(plot.validate().is_err());
+    }
+}
