@@ -56,8 +56,10 @@ impl BoxStats {
         let iqr = q3 - q1;
         let (lo_fence, hi_fence) = (q1 - 1.5 * iqr, q3 + 1.5 * iqr);
         let inside = |v: &&f64| **v >= lo_fence && **v <= hi_fence;
-        let whisker_low = s.iter().find(inside).copied().unwrap_or(q1);
-        let whisker_high = s.iter().rev().find(inside).copied().unwrap_or(q3);
+        // With few values the nearest value inside a fence can lie inside the box (an
+        // interpolated quartile sits between an outlier and it): the whisker then has length 0.
+        let whisker_low = s.iter().find(inside).copied().unwrap_or(q1).min(q1);
+        let whisker_high = s.iter().rev().find(inside).copied().unwrap_or(q3).max(q3);
         Some(BoxStats {
             q1,
             median,

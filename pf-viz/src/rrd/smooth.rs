@@ -1,1 +1,180 @@
-//! `smooth.rrd`.
+//! `smooth.rrd`: the genealogy of Fig. 1 on the `step` timeline and the SEM chains of Fig. 4
+//! on the `iteration` timeline.
+//!
+//! | entity | archetype | what |
+//! |---|---|---|
+//! | `smooth/genealogy/all` | `LineStrips2D` | every parent → child segment up to step `k`, light grey |
+//! | `smooth/genealogy/current` | `Points2D` | the particles of step `k` |
+//! | `smooth/genealogy/lineages` | `LineStrips2D` | the ancestral lines `ξ_{0:k}^i` of the particles of step `k`, dark |
+//! | `smooth/sem/<param>/chain_<c>` | `Scalars` | SEM chain `c` at each iteration |
+//! | `smooth/sem/<param>/exact` | `Scalars` | the exact EM trajectory |
+//!
+//! As in `rrd::genealogy`, a point of the genealogy is logged at `(k, −c·ξ)` (Rerun's 2D
+//! y-axis points down and both axes share one scale), `c` giving a 5:2 picture.
+
+use std::path::Path;
+
+use pf_smooth::Theta;
+use pf_smooth::experiments::SemResult;
+use rerun::blueprint::{
+    Blueprint, BlueprintActivation, Horizontal, Spatial2DView, TimeSeriesView, Vertical,
+};
+use rerun::components::Radius;
+use rerun::{LineStrips2D, Points2D, RecordingStream, Scalars, SeriesLines};
+
+use super::{ITERATION, STEP, rrd_err, save_rrd};
+use crate::error::Result;
+use crate::png::genealogy::GenealogyData;
+
+/// Root entity of the genealogy.
+pub const GENEALOGY: &str = "smooth/genealogy";
+/// Root entity of the SEM chains.
+pub const SEM: &str = "smooth/sem";
+
+const LIGHT: [u8; 4] = [130, 130, 130, 120];
+const DARK_BLUE: [u8; 4] = [40, 90, 200, 255];
+const CURRENT: [u8; 4] = [240, 170, 40, 255];
+const CHAINS: [[u8; 4]; 4] = [
+    [230, 120, 40, 255],
+    [60, 170, 90, 255],
+    [170, 80, 200, 255],
+    [200, 60, 60, 255],
+];
+const EXACT: [u8; 4] = [20, 20, 20, 255];
+
+type Pick = fn(&Theta) -> f64;
+const PARAMS: [(&str, &str, Pick); 3] = [
+    ("phi", "φ", |t| t.phi),
+    ("sigma2", "σ²", |t| t.sigma2),
+    ("rho2", "ρ²", |t| t.rho2),
+];
+
+/// Write the recording to `path` (atomically).
+///
+/// # Errors
+/// Inconsistent genealogy data, or a Rerun or I/O error naming `path`.
+pub fn save(path: &Path, genealogy: &GenealogyData, sem: &SemResult) -> Result<()> {
+    genealogy.validate()?;
+    save_rrd(path, "pf-viz: smooth (Cappé & Moulines)", |rec, path| {
+        let err = rrd_err(path);
+        blueprint(sem.sem.len())
+            .send(rec, BlueprintActivation::default())
+            .map_err(&err)?;
+        log_genealogy(rec, genealogy).map_err(&err)?;
+        log_sem(rec, sem).map_err(&err)?;
+        Ok(())
+    })
+}
+
+fn log_genealogy(rec: &RecordingStream, data: &GenealogyData) -> rerun::RecordingStreamResult<()> {
+    let (steps, n) = (data.n_steps(), data.n_particles());
+    let (lo, hi) = data
+        .positions
+        .iter()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    let c = 0.4 * (steps.max(2) - 1) as f64 / (hi - lo).max(1e-9);
+    let at = |k: usize, x: f64| [k as f32, (-c * x) as f32];
+    let mut segments: Vec<[[f32; 2]; 2]> = Vec::with_capacity(n * steps);
+    // lineage[i] = index at each earlier step of the ancestor of particle i of step k.
+    let mut lineages: Vec<Vec<usize>> = (0..n).map(|i| vec![i]).collect();
+    for k in 0..steps {
+        rec.set_time_sequence(STEP, k as i64);
+        if k > 0 {
+            for i in 0..n {
+                let a = data.ancestors[k][i];
+                segments.push([
+                    at(k - 1, data.positions[k - 1][a]),
+                    at(k, data.positions[k][i]),
+                ]);
+            }
+            rec.log(
+                format!("{GENEALOGY}/all"),
+                &LineStrips2D::new(segments.iter().map(|s| s.to_vec()))
+                    .with_colors([LIGHT])
+                    .with_radii([Radius::new_ui_points(0.5)])
+                    .with_draw_order(10.0),
+            )?;
+            lineages = (0..n)
+                .map(|i| {
+                    let mut l = lineages[data.ancestors[k][i]].clone();
+                    l.push(i);
+                    l
+                })
+                .collect();
+        }
+        rec.log(
+            format!("{GENEALOGY}/lineages"),
+            &LineStrips2D::new(lineages.iter().map(|l| {
+                l.iter()
+                    .enumerate()
+                    .map(|(j, &idx)| at(j, data.positions[j][idx]))
+                    .collect::<Vec<_>>()
+            }))
+            .with_colors([DARK_BLUE])
+            .with_radii([Radius::new_ui_points(1.5)])
+            .with_draw_order(30.0),
+        )?;
+        rec.log(
+            format!("{GENEALOGY}/current"),
+            &Points2D::new(data.positions[k].iter().map(|&x| at(k, x)))
+                .with_colors([CURRENT])
+                .with_radii([Radius::new_ui_points(3.0)])
+                .with_draw_order(40.0),
+        )?;
+    }
+    Ok(())
+}
+
+fn log_sem(rec: &RecordingStream, sem: &SemResult) -> rerun::RecordingStreamResult<()> {
+    for (p, _, _) in PARAMS {
+        for c in 0..sem.sem.len() {
+            rec.log_static(
+                format!("{SEM}/{p}/chain_{c}"),
+                &SeriesLines::new()
+                    .with_names([format!("SEM chain {c}")])
+                    .with_colors([CHAINS[c % CHAINS.len()]])
+                    .with_widths([1.5]),
+            )?;
+        }
+        rec.log_static(
+            format!("{SEM}/{p}/exact"),
+            &SeriesLines::new()
+                .with_names(["exact EM"])
+                .with_colors([EXACT])
+                .with_widths([3.0]),
+        )?;
+    }
+    for (i, exact) in sem.exact.iter().enumerate() {
+        rec.set_time_sequence(ITERATION, i as i64);
+        for (p, _, pick) in PARAMS {
+            rec.log(format!("{SEM}/{p}/exact"), &Scalars::single(pick(exact)))?;
+            for (c, chain) in sem.sem.iter().enumerate() {
+                if let Some(t) = chain.get(i) {
+                    rec.log(format!("{SEM}/{p}/chain_{c}"), &Scalars::single(pick(t)))?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The genealogy on the left, the three SEM parameters stacked on the right.
+fn blueprint(_chains: usize) -> Blueprint {
+    Blueprint::new(
+        Horizontal::new([
+            Spatial2DView::new("particle genealogy, N = 50 (x: step k, y: position ξ)")
+                .with_origin(GENEALOGY)
+                .into(),
+            Vertical::new(PARAMS.iter().map(|(p, name, _)| {
+                TimeSeriesView::new(format!("SEM chains and exact EM: {name}"))
+                    .with_origin(format!("{SEM}/{p}"))
+                    .into()
+            }))
+            .into(),
+        ])
+        .with_column_shares([3.0, 2.0]),
+    )
+}
