@@ -292,15 +292,17 @@ pub fn run(ctx: &Context<'_>, config: SmoothConfig) -> Result<SmoothResult> {
         let groups: Vec<(String, &ThetaSamples)> = runs
             .iter()
             .enumerate()
-            .map(|(j, u)| (format!("J{} (N={})", j + 1, u.particles), &u.result.joint))
+            .map(|(j, u)| (format!("J{}", j + 1), &u.result.joint))
             .collect();
         let plot = update_boxes(
             &format!(
-                "EM updates (10)–(12), joint estimator, n = {n}, {} replications",
-                config.replications
+                "EM updates (10)–(12), n = {n}, R = {}; J1, J2, J3: N = {}",
+                config.replications,
+                list(&config.particles)
             ),
             &groups,
             &runs[0].result.exact,
+            "joint estimator",
         )?;
         png::boxplot::render(&ctx.path(file), &plot)?;
         files.push(file.to_owned());
@@ -308,20 +310,24 @@ pub fn run(ctx: &Context<'_>, config: SmoothConfig) -> Result<SmoothResult> {
     let mut groups: Vec<(String, &ThetaSamples)> = Vec::new();
     let pick: Vec<&UpdateRuns> = fig2_long.iter().filter(|u| u.particles >= 100).collect();
     for (j, u) in pick.iter().enumerate() {
-        groups.push((format!("J{} (N={})", j + 2, u.particles), &u.result.joint));
+        groups.push((format!("J{}", j + 2), &u.result.joint));
     }
     for (j, u) in pick.iter().enumerate() {
         if let Some(f) = &u.result.fixed_lag {
-            groups.push((format!("F{} (N={})", j + 2, u.particles), f));
+            groups.push((format!("F{}", j + 2), f));
         }
     }
     let plot = update_boxes(
         &format!(
-            "Joint (J) against fixed-lag δ = {} (F), n = {}, {} replications",
-            config.lag, config.n, config.replications
+            "Joint (J) and fixed-lag δ = {} (F), n = {}, R = {}; 2, 3: N = {}",
+            config.lag,
+            config.n,
+            config.replications,
+            list(config.particles.get(1..).unwrap_or_default())
         ),
         &groups,
         &fig2_long[0].result.exact,
+        "J: joint, F: fixed-lag",
     )?;
     png::boxplot::render(&ctx.path("smooth-fig3-fixed-lag.png"), &plot)?;
     files.push("smooth-fig3-fixed-lag.png".to_owned());
@@ -429,7 +435,19 @@ fn genealogy(
 }
 
 /// Three panels (φ, σ², ρ²) of boxes, with the exact update as the reference line.
-fn update_boxes(title: &str, groups: &[(String, &ThetaSamples)], exact: &Theta) -> Result<BoxPlot> {
+fn list(v: &[usize]) -> String {
+    v.iter()
+        .map(usize::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn update_boxes(
+    title: &str,
+    groups: &[(String, &ThetaSamples)],
+    exact: &Theta,
+    x_label: &str,
+) -> Result<BoxPlot> {
     let panel = |name: &str, eq: &str, pick: fn(&ThetaSamples) -> &[f64], e: f64| {
         let groups = groups
             .iter()
@@ -447,7 +465,7 @@ fn update_boxes(title: &str, groups: &[(String, &ThetaSamples)], exact: &Theta) 
             .collect::<Result<Vec<_>>>()?;
         Ok(BoxPanel {
             title: format!("{name}, eq. ({eq})"),
-            x_label: "estimator (particles)".into(),
+            x_label: x_label.into(),
             y_label: format!("updated {name} (dimensionless)"),
             groups,
             ref_lines: vec![RefLine {
