@@ -160,9 +160,15 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             caption: format!(
                 "Fig. 1: paper, typical particle trajectories for N = 50. Ours: the genealogy \
                  of N = {} particles (bootstrap filter, systematic resampling, diffuse prior, \
-                 true θ) over the first {} steps of the data; black paths are ancestors of \
-                 the final particles, which share one ancestor a few steps back.",
-                c.genealogy_particles, c.genealogy_steps
+                 true θ) over the first {} steps of the data; dark paths are ancestors of \
+                 the final particles. {}",
+                c.genealogy_particles,
+                c.genealogy_steps,
+                match result.genealogy.coalescence_time {
+                    Some(t) => format!("All final particles share one ancestor at step {t}."),
+                    None =>
+                        "In this run the final particles do not yet share one ancestor.".to_owned(),
+                }
             ),
         },
         Figure {

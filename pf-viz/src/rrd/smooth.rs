@@ -6,8 +6,12 @@
 //! | `smooth/genealogy/all` | `LineStrips2D` | every parent → child segment up to step `k`, light grey |
 //! | `smooth/genealogy/current` | `Points2D` | the particles of step `k` |
 //! | `smooth/genealogy/lineages` | `LineStrips2D` | the ancestral lines `ξ_{0:k}^i` of the particles of step `k`, dark |
+//! | `smooth/genealogy_final/{all,lineages}` | `LineStrips2D` | static: the whole genealogy and the surviving lineages |
 //! | `smooth/sem/<param>/chain_<c>` | `Scalars` | SEM chain `c` at each iteration |
 //! | `smooth/sem/<param>/exact` | `Scalars` | the exact EM trajectory |
+//!
+//! The viewer opens on the `iteration` timeline (the SEM chains, and the static final
+//! genealogy); the genealogy's own tab plays on the `step` timeline.
 //!
 //! As in `rrd::genealogy`, a point of the genealogy is logged at `(k, −c·ξ)` (Rerun's 2D
 //! y-axis points down and both axes share one scale), `c` giving a 5:2 picture.
@@ -17,7 +21,8 @@ use std::path::Path;
 use pf_smooth::Theta;
 use pf_smooth::experiments::SemResult;
 use rerun::blueprint::{
-    Blueprint, BlueprintActivation, Horizontal, Spatial2DView, TimeSeriesView, Vertical,
+    Blueprint, BlueprintActivation, Horizontal, Spatial2DView, Tabs, TimePanel, TimeSeriesView,
+    Vertical,
 };
 use rerun::components::Radius;
 use rerun::{LineStrips2D, Points2D, RecordingStream, Scalars, SeriesLines};
@@ -28,6 +33,8 @@ use crate::png::genealogy::GenealogyData;
 
 /// Root entity of the genealogy.
 pub const GENEALOGY: &str = "smooth/genealogy";
+/// The genealogy at the last step, static, so that it is visible on every timeline.
+pub const FINAL: &str = "smooth/genealogy_final";
 /// Root entity of the SEM chains.
 pub const SEM: &str = "smooth/sem";
 
@@ -40,7 +47,8 @@ const CHAINS: [[u8; 4]; 4] = [
     [170, 80, 200, 255],
     [200, 60, 60, 255],
 ];
-const EXACT: [u8; 4] = [20, 20, 20, 255];
+// Light: the viewer's background is dark.
+const EXACT: [u8; 4] = [240, 240, 240, 255];
 
 type Pick = fn(&Theta) -> f64;
 const PARAMS: [(&str, &str, Pick); 3] = [
@@ -125,6 +133,26 @@ fn log_genealogy(rec: &RecordingStream, data: &GenealogyData) -> rerun::Recordin
                 .with_draw_order(40.0),
         )?;
     }
+    // The final picture, static.
+    rec.log_static(
+        format!("{FINAL}/all"),
+        &LineStrips2D::new(segments.iter().map(|s| s.to_vec()))
+            .with_colors([LIGHT])
+            .with_radii([Radius::new_ui_points(0.5)])
+            .with_draw_order(10.0),
+    )?;
+    rec.log_static(
+        format!("{FINAL}/lineages"),
+        &LineStrips2D::new(lineages.iter().map(|l| {
+            l.iter()
+                .enumerate()
+                .map(|(j, &idx)| at(j, data.positions[j][idx]))
+                .collect::<Vec<_>>()
+        }))
+        .with_colors([DARK_BLUE])
+        .with_radii([Radius::new_ui_points(1.5)])
+        .with_draw_order(30.0),
+    )?;
     Ok(())
 }
 
@@ -161,13 +189,20 @@ fn log_sem(rec: &RecordingStream, sem: &SemResult) -> rerun::RecordingStreamResu
     Ok(())
 }
 
-/// The genealogy on the left, the three SEM parameters stacked on the right.
+/// The genealogy on the left (final picture; a tab plays it on `step`), the three SEM
+/// parameters stacked on the right, on the `iteration` timeline.
 fn blueprint(_chains: usize) -> Blueprint {
     Blueprint::new(
         Horizontal::new([
-            Spatial2DView::new("particle genealogy, N = 50 (x: step k, y: position ξ)")
-                .with_origin(GENEALOGY)
-                .into(),
+            Tabs::new([
+                Spatial2DView::new("genealogy, N = 50, all steps (x: step k, y: position ξ)")
+                    .with_origin(FINAL)
+                    .into(),
+                Spatial2DView::new("genealogy step by step (select the `step` timeline)")
+                    .with_origin(GENEALOGY)
+                    .into(),
+            ])
+            .into(),
             Vertical::new(PARAMS.iter().map(|(p, name, _)| {
                 TimeSeriesView::new(format!("SEM chains and exact EM: {name}"))
                     .with_origin(format!("{SEM}/{p}"))
@@ -177,4 +212,5 @@ fn blueprint(_chains: usize) -> Blueprint {
         ])
         .with_column_shares([3.0, 2.0]),
     )
+    .with_time_panel(TimePanel::new().with_timeline(ITERATION))
 }
