@@ -596,7 +596,7 @@ fn sweep_figure(ctx: &Context<'_>, config: &SmoothConfig, sweeps: &[LagSweepResu
                 .map(|&d| (d as f64).log10())
                 .fold(0.0, f64::max);
             XyPlot {
-                title: format!("{name}"),
+                title: name.to_owned(),
                 x_label: "log₁₀ lag δ (1 → 0, 10 → 1, 100 → 2)".into(),
                 y_label: format!("{name}: bias and std. dev. (dimensionless)"),
                 layers,
