@@ -1,2 +1,41 @@
-//! placeholder
-fn main() {}
+//! One bootstrap run on Section 5's model (n = 500) with the joint and the fixed-lag
+//! estimators attached, against the bare filter, at N = 100 and 1000.
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use pf_core::filter::ParticleFilter;
+use pf_core::mc::stream_rng;
+use pf_core::models::NoisyAr1;
+use pf_smooth::em::paper_filter_config;
+use pf_smooth::{Ar1Data, Ar1Statistics, FixedLag, PathSpace, Theta};
+
+fn bench(c: &mut Criterion) {
+    let truth = NoisyAr1::new(0.98, 0.2, 1.0).unwrap();
+    let data = Ar1Data::new(truth.simulate(500, &mut stream_rng(1, 0)).1).unwrap();
+    let theta = Theta::paper_start();
+    let ys = data.filter_input();
+    let stats = Ar1Statistics::new(&data);
+    let mut g = c.benchmark_group("smooth n=500");
+    for n in [100usize, 1000] {
+        let model = theta.model(data.y()[0]).unwrap();
+        g.bench_with_input(BenchmarkId::new("filter only", n), &n, |b, &n| {
+            let mut pf = ParticleFilter::bootstrap(model, paper_filter_config(n)).unwrap();
+            let mut rng = stream_rng(2, 0);
+            b.iter(|| pf.run(&ys, None, &mut rng, &mut ()).unwrap());
+        });
+        g.bench_with_input(BenchmarkId::new("joint + fixed-lag 20", n), &n, |b, &n| {
+            let mut pf = ParticleFilter::bootstrap(model, paper_filter_config(n)).unwrap();
+            let mut rng = stream_rng(2, 0);
+            let mut joint = PathSpace::new(stats);
+            let mut lag = FixedLag::new(stats, 20).unwrap();
+            b.iter(|| {
+                pf.run(&ys, None, &mut rng, &mut (&mut joint, &mut lag))
+                    .unwrap();
+                joint.estimate().unwrap()
+            });
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
