@@ -1,6 +1,7 @@
 //! One bootstrap run on Section 5's model (n = 500) with the joint and the fixed-lag
 //! estimators attached, against the bare filter, at N = 100 and 1000.
 
+#![allow(missing_docs)] // criterion's macros generate undocumented items
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use pf_core::filter::ParticleFilter;
 use pf_core::mc::stream_rng;
