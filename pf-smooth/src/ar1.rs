@@ -288,3 +288,45 @@ impl ThetaSamples {
         self.phi.is_empty()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_parameters_and_data_are_errors_not_panics() {
+        assert!(Theta::from_std(0.8, 0.0, 1.0).is_err());
+        assert!(Theta::from_std(0.8, 0.5, -1.0).is_err());
+        assert!(Theta::from_std(f64::NAN, 0.5, 1.0).is_err());
+        assert!(matches!(
+            Ar1Data::new(vec![1.0]),
+            Err(SmoothError::TooFewObservations { got: 1, need: 2 })
+        ));
+        assert!(matches!(
+            Ar1Data::new(vec![1.0, f64::NAN, 2.0]),
+            Err(SmoothError::NonFiniteObservation { index: 1, .. })
+        ));
+        let degenerate = SuffStats {
+            n: 2,
+            tau: [0.0, 0.0, 1.0, 1.0],
+        };
+        assert!(matches!(
+            degenerate.m_step(),
+            Err(SmoothError::DegenerateUpdate { .. })
+        ));
+    }
+
+    #[test]
+    fn m_step_and_score_by_hand() {
+        // τ = (2, 1, 3, 6), n = 2: φ̂ = 1/2, σ̂² = (3 − 1/2)/2 = 5/4, ρ̂² = 6/3 = 2.
+        let s = SuffStats {
+            n: 2,
+            tau: [2.0, 1.0, 3.0, 6.0],
+        };
+        let t = s.m_step().unwrap();
+        assert_eq!((t.phi, t.sigma2, t.rho2), (0.5, 1.25, 2.0));
+        // The score vanishes at the M-step's own fixed point.
+        let g = s.score(&t);
+        assert!(g.phi.abs() < 1e-12 && g.sigma2.abs() < 1e-12 && g.rho2.abs() < 1e-12);
+    }
+}

@@ -63,3 +63,8 @@ pub use error::{Result, SmoothError};
 pub use fixed_lag::FixedLag;
 pub use functional::AdditiveFunctional;
 pub use path_space::PathSpace;
+
+/// The README's example, compiled and run as a doctest.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
