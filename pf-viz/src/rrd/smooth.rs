@@ -85,6 +85,7 @@ fn log_genealogy(rec: &RecordingStream, data: &GenealogyData) -> rerun::Recordin
         });
     let c = 0.4 * (steps.max(2) - 1) as f64 / (hi - lo).max(1e-9);
     let at = |k: usize, x: f64| [k as f32, (-c * x) as f32];
+    let at_idx = |j: usize, idx: usize| at(j, data.positions[j][idx]);
     let mut segments: Vec<[[f32; 2]; 2]> = Vec::with_capacity(n * steps);
     // lineage[i] = index at each earlier step of the ancestor of particle i of step k.
     let mut lineages: Vec<Vec<usize>> = (0..n).map(|i| vec![i]).collect();
@@ -98,13 +99,7 @@ fn log_genealogy(rec: &RecordingStream, data: &GenealogyData) -> rerun::Recordin
                     at(k, data.positions[k][i]),
                 ]);
             }
-            rec.log(
-                format!("{GENEALOGY}/all"),
-                &LineStrips2D::new(segments.iter().map(|s| s.to_vec()))
-                    .with_colors([LIGHT])
-                    .with_radii([Radius::new_ui_points(0.5)])
-                    .with_draw_order(10.0),
-            )?;
+            rec.log(format!("{GENEALOGY}/all"), &all_paths(&segments))?;
             lineages = (0..n)
                 .map(|i| {
                     let mut l = lineages[data.ancestors[k][i]].clone();
@@ -115,15 +110,7 @@ fn log_genealogy(rec: &RecordingStream, data: &GenealogyData) -> rerun::Recordin
         }
         rec.log(
             format!("{GENEALOGY}/lineages"),
-            &LineStrips2D::new(lineages.iter().map(|l| {
-                l.iter()
-                    .enumerate()
-                    .map(|(j, &idx)| at(j, data.positions[j][idx]))
-                    .collect::<Vec<_>>()
-            }))
-            .with_colors([DARK_BLUE])
-            .with_radii([Radius::new_ui_points(1.5)])
-            .with_draw_order(30.0),
+            &lineage_strips(&lineages, &at_idx),
         )?;
         rec.log(
             format!("{GENEALOGY}/current"),
@@ -134,26 +121,33 @@ fn log_genealogy(rec: &RecordingStream, data: &GenealogyData) -> rerun::Recordin
         )?;
     }
     // The final picture, static.
-    rec.log_static(
-        format!("{FINAL}/all"),
-        &LineStrips2D::new(segments.iter().map(|s| s.to_vec()))
-            .with_colors([LIGHT])
-            .with_radii([Radius::new_ui_points(0.5)])
-            .with_draw_order(10.0),
-    )?;
+    rec.log_static(format!("{FINAL}/all"), &all_paths(&segments))?;
     rec.log_static(
         format!("{FINAL}/lineages"),
-        &LineStrips2D::new(lineages.iter().map(|l| {
-            l.iter()
-                .enumerate()
-                .map(|(j, &idx)| at(j, data.positions[j][idx]))
-                .collect::<Vec<_>>()
-        }))
-        .with_colors([DARK_BLUE])
-        .with_radii([Radius::new_ui_points(1.5)])
-        .with_draw_order(30.0),
+        &lineage_strips(&lineages, &at_idx),
     )?;
     Ok(())
+}
+
+/// Every parent → child segment so far, thin and light.
+fn all_paths(segments: &[[[f32; 2]; 2]]) -> LineStrips2D {
+    LineStrips2D::new(segments.iter().map(|s| s.to_vec()))
+        .with_colors([LIGHT])
+        .with_radii([Radius::new_ui_points(0.5)])
+        .with_draw_order(10.0)
+}
+
+/// The ancestral lines `lineages[i][j]` (index at step j), dark.
+fn lineage_strips(lineages: &[Vec<usize>], at: &dyn Fn(usize, usize) -> [f32; 2]) -> LineStrips2D {
+    LineStrips2D::new(lineages.iter().map(|l| {
+        l.iter()
+            .enumerate()
+            .map(|(j, &idx)| at(j, idx))
+            .collect::<Vec<_>>()
+    }))
+    .with_colors([DARK_BLUE])
+    .with_radii([Radius::new_ui_points(1.5)])
+    .with_draw_order(30.0)
 }
 
 fn log_sem(rec: &RecordingStream, sem: &SemResult) -> rerun::RecordingStreamResult<()> {
