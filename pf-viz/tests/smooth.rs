@@ -158,4 +158,11 @@ fn bad_inputs_get_one_line_errors_naming_file_line_and_problem() {
     fails(&ok, ("--rho", "-2"), &["rho"]);
     fails(&ok, ("--particles", "0"), &["particles"]);
     fails(&ok, ("--replications", "0"), &["replications"]);
+    fails(&ok, ("--phi", "NaN"), &["phi"]);
+    let mut args = vec!["smooth", "em", "--data", &ok];
+    args.extend(THETA);
+    args.extend(["--particles", "5", "--replications", "1", "--lag", "0"]);
+    let o = pf_viz(&args);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("lag"));
 }
