@@ -11,6 +11,9 @@ use super::style::{self, Dash, LegendPos, Marker, plot_err};
 use super::{Canvas, render_png};
 use crate::error::{Result, VizError};
 
+/// Series with more points than this are drawn without markers.
+const MAX_MARKED_POINTS: usize = 60;
+
 /// A shaded band `lower[j] ≤ y ≤ upper[j]` at the series' x values.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Band {
@@ -192,7 +195,13 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
         let look = style::SERIES[j % style::SERIES.len()];
         let stroke = look.stroke();
         let points: Vec<(f64, f64)> = s.x.iter().copied().zip(s.y.iter().copied()).collect();
-        let anno = match look.dash {
+        let dense = points.len() > MAX_MARKED_POINTS;
+        // A marked solid series that is too dense for markers is dotted instead.
+        let dash = match (dense, look.marker, look.dash) {
+            (true, Marker::Circle | Marker::Cross, Dash::Solid) => Dash::Dashed { on: 3, off: 4 },
+            (_, _, d) => d,
+        };
+        let anno = match dash {
             Dash::Solid => chart.draw_series(LineSeries::new(points.clone(), stroke)),
             Dash::Dashed { on, off } => {
                 chart.draw_series(DashedLineSeries::new(points.clone(), on, off, stroke))
@@ -207,7 +216,10 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
         // the in-memory backend, so dashes and markers appear on the series, not the key.
         anno.label(name)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 30, y)], stroke));
-        match look.marker {
+        // Markers on a dense series would merge into a thick line: beyond this many
+        // points the dash pattern alone tells the series apart.
+        let marker = if dense { Marker::None } else { look.marker };
+        match marker {
             Marker::None => {}
             Marker::Circle => {
                 chart
