@@ -159,13 +159,15 @@ fn same_seed_same_numbers_whatever_the_jobs() {
         let mut v: serde_json::Value =
             serde_json::from_slice(&fs::read(d.join("summary.json")).unwrap()).unwrap();
         let timing = v["timing_dependent"].clone();
-        for (section, keys) in timing.as_object().unwrap() {
-            for k in keys.as_array().unwrap() {
+        for (section, pointers) in timing.as_object().unwrap() {
+            for p in pointers.as_array().unwrap() {
+                let p = p.as_str().unwrap();
+                let (parent, key) = p.rsplit_once('/').unwrap();
                 let removed = v["sections"][section]
-                    .as_object_mut()
-                    .unwrap()
-                    .remove(k.as_str().unwrap());
-                assert!(removed.is_some(), "{section}.{k} is declared but absent");
+                    .pointer_mut(parent)
+                    .and_then(|x| x.as_object_mut())
+                    .and_then(|o| o.remove(key));
+                assert!(removed.is_some(), "{section}{p} is declared but absent");
             }
         }
         v

@@ -67,9 +67,9 @@ pub struct SectionReport {
     pub notes: Vec<String>,
     /// Other files written (`.rrd` recordings, CSV), relative to the output directory.
     pub files: Vec<String>,
-    /// Keys of `result` whose numbers depend on measured wall-clock time (timings, and
-    /// searches driven by them): the only parts of `summary.json` that differ between runs
-    /// with the same seed.
+    /// JSON pointers into `result` (e.g. `/rmse/seconds_per_run`) to the numbers that depend
+    /// on measured wall-clock time (timings, and searches driven by them): the only parts of
+    /// `summary.json` that differ between runs with the same seed.
     pub timing_dependent: Vec<String>,
 }
 
@@ -178,8 +178,8 @@ pub struct Summary {
     pub rrd: RrdOutput,
     /// Each section's result, by name.
     pub sections: BTreeMap<&'static str, serde_json::Value>,
-    /// Per section, the keys of its result that depend on measured time; everything else
-    /// is identical for the same seed, whatever `--jobs`.
+    /// Per section, JSON pointers into its result to the numbers that depend on measured
+    /// time; everything else is identical for the same seed, whatever `--jobs`.
     pub timing_dependent: BTreeMap<&'static str, Vec<String>>,
 }
 
