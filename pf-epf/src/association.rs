@@ -13,9 +13,10 @@
 //! - **Energy, per measurement** ([`Association::EnergyPerMeasurement`]). Eq. (1) read
 //!   literally: `y_j → argmin_k E(k, y_j)` over the targets whose gate holds it; a target
 //!   given several keeps the one of least energy.
-//! - **NNSF** ([`Association::Nearest`]). Each target takes the validated detection nearest
-//!   (Mahalanobis) to the point E¹ measures from; two targets may take the same detection
-//!   (Li & Bar-Shalom 1996).
+//! - **NNSF** ([`Association::Nearest`]). Each detection goes to the validated target
+//!   whose prediction is nearest (the Mahalanobis distance of E¹, from the same point); a
+//!   target given several keeps the nearest (Li & Bar-Shalom 1996). This is how the paper
+//!   applies it in Section 4 ("NNSF would associate M₂ to T₁").
 
 use crate::assignment::Hungarian;
 use crate::energy::{EnergyConfig, EnergyMatrix, TargetGeometry};
@@ -88,6 +89,29 @@ pub fn gate_threshold(p_g: f64) -> Result<f64> {
     Ok(-2.0 * (-p_g).ln_1p())
 }
 
+/// `y_j → argmin_k cost(k, j)` over the targets whose gate holds `y_j` (ties to the lower
+/// `k`); a target given several detections keeps the one of least cost. `cost` and `gated`
+/// are K × M, row-major.
+fn per_measurement_argmin(
+    k: usize,
+    m: usize,
+    cost: &[f64],
+    gated: &[bool],
+    out: &mut [Option<usize>],
+) {
+    for j in 0..m {
+        let best = (0..k)
+            .filter(|&i| gated[i * m + j])
+            .min_by(|&a, &b| cost[a * m + j].total_cmp(&cost[b * m + j]));
+        if let Some(i) = best {
+            let c = cost[i * m + j];
+            if out[i].is_none_or(|jj| cost[i * m + jj] > c) {
+                out[i] = Some(j);
+            }
+        }
+    }
+}
+
 /// Association buffers, reused from frame to frame.
 #[derive(Debug, Clone, Default)]
 pub struct Associator {
@@ -138,37 +162,16 @@ impl Associator {
         }
         match method {
             Association::Nearest => {
-                for (i, g) in targets.iter().enumerate() {
+                // Each detection goes to the nearest validated prediction (E¹'s distance).
+                self.cost.clear();
+                for g in targets {
                     let c = g.e1_centre(cfg.e1_reference);
-                    let mut best = f64::INFINITY;
-                    for (j, y) in ys.iter().enumerate() {
-                        let d = g.mahalanobis_sq(&c, y);
-                        if self.gated[i * m + j] && d < best {
-                            best = d;
-                            out[i] = Some(j);
-                        }
-                    }
+                    self.cost.extend(ys.iter().map(|y| g.mahalanobis_sq(&c, y)));
                 }
+                per_measurement_argmin(k, m, &self.cost, &self.gated, out);
             }
             Association::EnergyPerMeasurement => {
-                let mut best = [f64::INFINITY; 1];
-                for j in 0..m {
-                    let mut arg = None;
-                    best[0] = f64::INFINITY;
-                    for i in 0..k {
-                        let e = self.energy.magnitude(i, j);
-                        if self.gated[i * m + j] && e < best[0] {
-                            best[0] = e;
-                            arg = Some(i);
-                        }
-                    }
-                    if let Some(i) = arg {
-                        let keep = out[i].is_none_or(|jj| self.energy.magnitude(i, jj) > best[0]);
-                        if keep {
-                            out[i] = Some(j);
-                        }
-                    }
-                }
+                per_measurement_argmin(k, m, self.energy.magnitudes(), &self.gated, out);
             }
             Association::Energy => {
                 // Columns: the M detections, then one "missed" column per target.
@@ -190,10 +193,9 @@ impl Associator {
                     .solve(k, w, &self.cost, &mut self.cols)
                     .is_some()
                 {
-                    for i in 0..k {
-                        let j = self.cols[i];
+                    for (i, (o, &j)) in out.iter_mut().zip(&self.cols).enumerate() {
                         if j < m && self.gated[i * m + j] {
-                            out[i] = Some(j);
+                            *o = Some(j);
                         }
                     }
                 }

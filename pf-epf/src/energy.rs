@@ -11,12 +11,14 @@
 //! - `E(k, y_j) = (1/√3)·√(Σ_l α_l² E^l(k, y_j)²)`, `α_l = 1/Σ_{k=1}^K E^l(k, y_j)` (eq. (1)).
 //!
 //! ## Reading of E¹
-//! The paper says E¹ measures the distance to "the prediction of A at (t−1)". Read
-//! literally that is the estimate `Â(t−1)`; read as "the prediction made at t−1" it is the
-//! one-step prediction `Â(t)`. Only the second makes the paper's next sentence true ("if we
-//! only consider the linear translation in one direction, the data association problem is
-//! limited to the computation of the Mahalanobis distance energy"), so it is the default
-//! ([`E1Reference::Predicted`]); the literal reading is [`E1Reference::Previous`].
+//! The paper says E¹ measures the distance between `y_j` and "the prediction of A at
+//! (t−1)", and writes `Â(t−1)` in the formula. We take it literally: `Â(t−1)`, the
+//! target's estimate at the previous frame ([`E1Reference::Previous`], the default). This
+//! is also the only reading under which Section 4's claims hold: the van–plane detection
+//! "closer to T₁" and the walking men's "equidistant" detection are judged by where the
+//! targets were, while the dynamics enter through the gate (centred on `Â(t)`), E² and E³.
+//! The other reading, the one-step prediction `Â(t)`, is [`E1Reference::Predicted`]; the
+//! report shows the nearest-neighbour filter under it too.
 //!
 //! ## Degenerate geometry (never NaN)
 //! - A circumcircle of collinear or coincident points, or of radius above
@@ -46,11 +48,11 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum E1Reference {
-    /// `Â(t)`, the prediction made at `t − 1` for `t` (default; see the module docs).
+    /// `Â(t−1)`, the estimate at the previous frame (the paper's formula; default).
     #[default]
-    Predicted,
-    /// `Â(t−1)`, the estimate at the previous frame (the literal wording).
     Previous,
+    /// `Â(t)`, the prediction made at `t − 1` for `t`.
+    Predicted,
 }
 
 /// Choices the paper leaves open in the energies.
@@ -70,7 +72,7 @@ pub struct EnergyConfig {
 impl Default for EnergyConfig {
     fn default() -> Self {
         EnergyConfig {
-            e1_reference: E1Reference::Predicted,
+            e1_reference: E1Reference::Previous,
             radius_cap: 20.0,
             e3_floor: 1e-3,
         }
