@@ -62,5 +62,29 @@ fn batch(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bootstrap, batch);
+/// N = 10⁷ (80 MB per state array, far beyond the caches), over 20 steps to keep a sample
+/// short: is the cost per particle-step flat in N, and what do two threads buy?
+fn batch_large(c: &mut Criterion) {
+    const LARGE_STEPS: usize = 20;
+    const N: usize = 10_000_000;
+    let model = NoisyAr1::new(0.98, 0.2, 1.0).expect("valid parameters");
+    let (_, ys) = model.simulate(LARGE_STEPS - 1, &mut stream_rng(1, 0));
+    let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
+    let mut group = c.benchmark_group("batch_ar1_large");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements((N * LARGE_STEPS) as u64));
+    for (name, par) in [("1-thread", Par::Seq), ("rayon", Par::Rayon)] {
+        let cfg = BatchConfig {
+            par,
+            ..BatchConfig::new(N, 2)
+        };
+        let mut f = BatchBootstrap::new(model, cfg).expect("valid config");
+        group.bench_with_input(BenchmarkId::new(name, format!("N={N}")), &N, |b, _| {
+            b.iter(|| black_box(f.run(&ys).expect("filter runs").log_lik))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bootstrap, batch, batch_large);
 criterion_main!(benches);

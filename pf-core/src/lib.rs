@@ -14,6 +14,7 @@
 //! | [`resample`] | multinomial, systematic, stratified and residual schemes |
 //! | [`filter`] | the SIR filter, bootstrap and guided mutations, resampling policy |
 //! | [`genealogy`] | ancestry: trajectories, surviving lineages, coalescence |
+//! | [`ancestry`] | pruned path storage: living trajectories in far less than `N·n` |
 //! | [`geometry`] | angle wrapping for bearings |
 //! | [`observe`] | the observer trait and recorders |
 //! | [`gaussian`] | multivariate normals and error ellipses |
@@ -21,6 +22,7 @@
 //! | [`mc`] | reproducible parallel Monte Carlo replications |
 //! | [`metrics`] | RMSE, REC curves, residual summaries |
 
+pub mod ancestry;
 pub mod error;
 pub mod filter;
 pub mod gaussian;

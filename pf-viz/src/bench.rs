@@ -1,4 +1,5 @@
-//! `pf-viz bench bootstrap`: the speed of the AR(1)+noise bootstrap filter on this machine.
+//! `pf-viz bench bootstrap`: the speed of the AR(1)+noise bootstrap filter on this machine;
+//! `pf-viz bench genealogy`: the memory of pruned path storage.
 //!
 //! The filter is pf-core's structure-of-arrays fast path ([`BatchBootstrap`]): φ = 0.98,
 //! σ = 0.2, ρ = 1, resampling at every step, Cappé & Moulines' diffuse prior N(Y_0, ρ²), so
@@ -11,7 +12,10 @@ use pf_core::mc::{Par, stream_rng};
 use pf_core::models::NoisyAr1;
 use serde::{Deserialize, Serialize};
 
-use crate::cli::BenchBootstrapArgs;
+use pf_core::filter::{FilterConfig, ParticleFilter};
+use pf_core::observe::AncestryRecorder;
+
+use crate::cli::{BenchBootstrapArgs, BenchGenealogyArgs};
 use crate::data::read_y;
 use crate::error::{Result, VizError};
 
@@ -104,4 +108,88 @@ pub fn bootstrap(args: &BenchBootstrapArgs) -> Result<BenchResult> {
         ns_per_particle_step: seconds * 1e9 / (args.particles as f64 * steps as f64),
         loglik: run.log_lik,
     })
+}
+
+/// The JSON of `pf-viz bench genealogy --json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GenealogyBenchResult {
+    /// N.
+    pub particles: usize,
+    /// n: steps after the first.
+    pub steps: usize,
+    /// Wall-clock seconds of filtering with the tree recorder.
+    pub seconds: f64,
+    /// Most tree nodes stored at once.
+    pub peak_nodes: usize,
+    /// Tree nodes stored at the end.
+    pub live_nodes: usize,
+    /// Bytes per node (parent id, child count, state).
+    pub bytes_per_node: usize,
+    /// `peak_nodes · bytes_per_node`.
+    pub tree_peak_bytes: usize,
+    /// What a full ancestor table (`N·(n+1)` indices and states) would take, in bytes.
+    pub full_storage_bytes: usize,
+    /// The process's peak resident memory (Linux `VmHWM`), when the system reports it.
+    pub peak_rss_bytes: Option<u64>,
+    /// Steps back from the end at which the living paths coalesce into one (`None`:
+    /// not within the run).
+    pub coalescence_depth: Option<usize>,
+}
+
+/// Run the bootstrap filter on the AR(1)+noise model while keeping every living particle's
+/// trajectory in pruned path storage, and measure that storage.
+///
+/// # Errors
+/// N = 0 or n = 0, or a filter failure.
+pub fn genealogy(args: &BenchGenealogyArgs) -> Result<GenealogyBenchResult> {
+    let invalid = |message: &str| VizError::Argument {
+        message: message.into(),
+    };
+    if args.particles == 0 {
+        return Err(invalid("--particles must be at least 1"));
+    }
+    if args.steps == 0 {
+        return Err(invalid("--steps must be at least 1"));
+    }
+    let core = VizError::core("bench genealogy");
+    let model = NoisyAr1::new(0.98, 0.2, 1.0).map_err(core)?;
+    let (_, ys) = model.simulate(args.steps, &mut stream_rng(args.seed, u64::MAX));
+    let obs: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
+    let mut pf =
+        ParticleFilter::bootstrap(model, FilterConfig::new(args.particles)).map_err(core)?;
+    let mut recorder = AncestryRecorder::new();
+    let start = Instant::now();
+    pf.run(&obs, None, &mut stream_rng(args.seed, 0), &mut recorder)
+        .map_err(core)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let tree = recorder
+        .tree()
+        .ok_or_else(|| invalid("the filter recorded no step"))?;
+    let bytes_per_node = pf_core::ancestry::AncestryTree::<f64>::bytes_per_node();
+    let depth = tree.distinct_ancestors(tree.n_steps());
+    Ok(GenealogyBenchResult {
+        particles: args.particles,
+        steps: args.steps,
+        seconds,
+        peak_nodes: tree.peak_nodes(),
+        live_nodes: tree.live_nodes(),
+        bytes_per_node,
+        tree_peak_bytes: tree.peak_nodes() * bytes_per_node,
+        full_storage_bytes: args.particles
+            * (args.steps + 1)
+            * (std::mem::size_of::<usize>() + std::mem::size_of::<f64>()),
+        peak_rss_bytes: peak_rss_bytes(),
+        coalescence_depth: depth
+            .iter()
+            .rposition(|&c| c == 1)
+            .map(|k| depth.len() - 1 - k),
+    })
+}
+
+/// Peak resident set size from `/proc/self/status` (`VmHWM`, in kB), where there is one.
+fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }

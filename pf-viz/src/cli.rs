@@ -44,6 +44,25 @@ pub enum Command {
 pub enum BenchCommand {
     /// The AR(1)+noise bootstrap filter (φ=0.98, σ=0.2, ρ=1), resampling at every step.
     Bootstrap(BenchBootstrapArgs),
+    /// Memory of pruned path storage (every living trajectory) over a long run.
+    Genealogy(BenchGenealogyArgs),
+}
+
+/// Arguments of `pf-viz bench genealogy`.
+#[derive(Debug, Clone, Args)]
+pub struct BenchGenealogyArgs {
+    /// Number of particles N.
+    #[arg(long, value_name = "N", default_value_t = 100_000)]
+    pub particles: usize,
+    /// Number of steps n.
+    #[arg(long, value_name = "n", default_value_t = 10_000)]
+    pub steps: usize,
+    /// Seed of the simulated data and of the filter.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `pf-viz bench bootstrap`.

@@ -62,6 +62,25 @@ pub fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+        Command::Bench(BenchCommand::Genealogy(args)) => {
+            let r = bench::genealogy(&args)?;
+            if args.json {
+                cmd::print_json(&r)?;
+            } else {
+                println!(
+                    "pruned path storage, N = {}, n = {}: peak {} nodes ({:.1} MB) against {:.1} MB for full storage; peak RSS {}; {:.1} s",
+                    r.particles,
+                    r.steps,
+                    r.peak_nodes,
+                    r.tree_peak_bytes as f64 / 1e6,
+                    r.full_storage_bytes as f64 / 1e6,
+                    r.peak_rss_bytes
+                        .map_or("unknown".into(), |b| format!("{:.1} MB", b as f64 / 1e6)),
+                    r.seconds
+                );
+            }
+            Ok(())
+        }
         Command::Smooth(c) => cmd::smooth::run(c),
         Command::Mpf(c) => cmd::mpf::run(c),
         Command::Homotopy(c) => cmd::homotopy::run(c),

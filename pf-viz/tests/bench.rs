@@ -111,3 +111,35 @@ fn bench_bootstrap_keeps_its_json_contract() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("line 3"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn bench_genealogy_prunes_dead_branches() {
+    // Coalescence takes a few multiples of N steps here (weakly informative observations).
+    let (n, steps) = (200usize, 2000usize);
+    let o = pf_viz(&[
+        "bench",
+        "genealogy",
+        "--particles",
+        &n.to_string(),
+        "--steps",
+        &steps.to_string(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let peak = v["peak_nodes"].as_u64().unwrap() as usize;
+    let live = v["live_nodes"].as_u64().unwrap() as usize;
+    // Every living path has n + 1 states and the N leaves are distinct: a lower bound.
+    assert!(live >= n + steps, "live {live}");
+    assert!(peak >= live);
+    // Full storage would hold N·(n+1) nodes; pruning keeps a small fraction for this
+    // mixing model, whose paths coalesce within the run.
+    assert!(peak < n * (steps + 1) / 10, "peak {peak} nodes");
+    let depth = v["coalescence_depth"]
+        .as_u64()
+        .expect("paths coalesce within the run");
+    assert!((depth as usize) < steps);
+    let o = pf_viz(&["bench", "genealogy", "--particles", "0", "--json"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(o.stdout.is_empty());
+}

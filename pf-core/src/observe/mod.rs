@@ -3,11 +3,13 @@
 //! An [`Observer`] is passed as `&mut`, so the caller keeps it and reads what it recorded
 //! afterwards. Observers compose as tuples, and [`Every`] decimates them.
 
+mod ancestry;
 mod cloud;
 mod ess;
 mod estimates;
 mod genealogy;
 
+pub use ancestry::AncestryRecorder;
 pub use cloud::{Cloud, CloudRecorder};
 pub use ess::EssRecorder;
 pub use estimates::EstimateRecorder;

@@ -16,7 +16,8 @@ impl Resample for Residual {
         let mf = m as f64;
         let mut k = 0;
         for (j, &wj) in w.iter().enumerate() {
-            let copies = ((mf * wj).floor() as usize).min(m - k);
+            // M·w ≥ 0, so the cast is the floor (without a libm call on baseline x86-64).
+            let copies = ((mf * wj) as usize).min(m - k);
             ancestors[k..k + copies].fill(j);
             k += copies;
         }
@@ -24,10 +25,15 @@ impl Resample for Residual {
         if r == 0 {
             return;
         }
+        // A multiplication, not a division, on the merge's dependency chain.
+        let inv_r = 1.0 / r as f64;
         let residual = |j: usize| {
             let x = mf * w[j];
-            (x - x.floor()) / r as f64
+            (x - (x as usize) as f64) * inv_r
         };
+        // The residual draws are about half as many as the particles, so the merge mostly
+        // skips particles: a branching merge predicts that well (measured faster here than
+        // the select-based merge multinomial resampling uses).
         let mut cdf = InverseCdf::new(w.len(), residual);
         let tail = &mut ancestors[k..];
         sorted_uniforms(r, rng, |i, u| tail[i] = cdf.locate(u));

@@ -26,14 +26,27 @@ impl Resample for Systematic {
 /// prefix sum turns the marks into ancestors, since `A_i = #{j : k_j ≤ i}` is the smallest
 /// `j` with `k_j > i` (`k` is non-decreasing in `j`).
 pub(crate) fn systematic_from_uniform(w: &[f64], u: f64, ancestors: &mut [usize]) {
+    let mf = ancestors.len() as f64;
+    prefix_offspring(w, ancestors, |c| ceil_to_usize(mf * c - u));
+}
+
+/// Ancestors from offspring boundaries: `boundary(C_j)` is the number of outputs whose point
+/// lies below the cumulative weight `C_j` (non-decreasing in `j`). Each boundary marks one
+/// step of the ancestor index; a prefix sum over the marks gives `A_i = #{j : k_j ≤ i}`, the
+/// first particle whose cumulative weight exceeds output `i`'s point, with no branch on the
+/// data. Outputs beyond every boundary go to the last particle (the clamp).
+pub(crate) fn prefix_offspring(
+    w: &[f64],
+    ancestors: &mut [usize],
+    boundary: impl Fn(f64) -> usize,
+) {
     let m = ancestors.len();
-    let mf = m as f64;
     ancestors.fill(0);
     let mut c = 0.0;
     // The last particle's boundary is M by definition (the clamp), so it marks nothing.
     for &wj in &w[..w.len() - 1] {
         c += wj;
-        let k = ceil_to_usize(mf * c - u).min(m);
+        let k = boundary(c).min(m);
         if k < m {
             ancestors[k] += 1;
         }

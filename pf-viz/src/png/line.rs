@@ -161,8 +161,8 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
         .y_desc(&plot.y_label)
         .axis_desc_style(style::text(style::LABEL_PX))
         .label_style(style::text(style::TICK_PX))
-        .x_label_formatter(&|x| trim(*x))
-        .y_label_formatter(&|y| trim(*y))
+        .x_label_formatter(&|x| style::tick_label(*x))
+        .y_label_formatter(&|y| style::tick_label(*y))
         .bold_line_style(style::GRID.stroke_width(1))
         .light_line_style(WHITE.stroke_width(0))
         .axis_style(style::INK.stroke_width(1))
@@ -253,29 +253,9 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
     Ok(())
 }
 
-/// A tick label without trailing zeros: `20`, `0.5`, `1e-3`.
-fn trim(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    if v.abs() >= 1e5 || v.abs() < 1e-3 {
-        return format!("{v:.1e}");
-    }
-    let s = format!("{v:.3}");
-    s.trim_end_matches('0').trim_end_matches('.').to_owned()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn tick_labels_are_short() {
-        assert_eq!(trim(20.0), "20");
-        assert_eq!(trim(0.5), "0.5");
-        assert_eq!(trim(-1.25), "-1.25");
-        assert_eq!(trim(0.0), "0");
-    }
 
     #[test]
     fn bad_lengths_are_rejected() {

@@ -205,6 +205,18 @@ pub fn padded(lo: f64, hi: f64, frac: f64) -> (f64, f64) {
     }
 }
 
+/// A tick label without trailing zeros: `20`, `0.5`, `1e-3`.
+pub fn tick_label(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    if v.abs() >= 1e5 || v.abs() < 1e-3 {
+        return format!("{v:.1e}");
+    }
+    let s = format!("{v:.3}");
+    s.trim_end_matches('0').trim_end_matches('.').to_owned()
+}
+
 /// Map a plotters drawing error to [`VizError::Plot`] for the figure at `path`.
 pub fn plot_err<E: std::fmt::Display>(path: &std::path::Path) -> impl Fn(E) -> VizError + '_ {
     move |e| VizError::Plot {
@@ -221,6 +233,14 @@ mod tests {
     fn fonts_register_and_repeat() {
         init_fonts().unwrap();
         init_fonts().unwrap();
+    }
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(tick_label(20.0), "20");
+        assert_eq!(tick_label(0.5), "0.5");
+        assert_eq!(tick_label(-1.25), "-1.25");
+        assert_eq!(tick_label(0.0), "0");
     }
 
     #[test]

@@ -178,9 +178,9 @@ pub fn write_markdown(
             out.push('\n');
         }
         if !r.files.is_empty() {
-            let _ = write!(
+            let _ = writeln!(
                 out,
-                "Other files: {}\n",
+                "Other files: {}",
                 r.files
                     .iter()
                     .map(|f| format!("`{f}`"))

@@ -1,0 +1,169 @@
+//! The whole report at the `quick` scale, the way a researcher runs it: every section runs,
+//! every figure decodes and shows something, every recording loads in the official Rerun
+//! tools (when `PF_RERUN` names them, as `scripts/test.sh` arranges), and the pages carry
+//! every figure and table without reaching for the network.
+
+use std::collections::BTreeSet;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+const BIN: &str = env!("CARGO_BIN_EXE_pf-viz");
+
+/// The paper sections `--only` accepts, as the issue names them.
+const PAPERS: [&str; 5] = ["smooth", "mpf", "homotopy", "dredge", "epf"];
+
+/// One quick report for every test in this file (it is the expensive part).
+fn report() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("pf-viz-report-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        let o = Command::new(BIN)
+            .args(["report", "--scale", "quick", "--seed", "3", "--out"])
+            .arg(&dir)
+            .output()
+            .expect("run pf-viz");
+        assert!(
+            o.status.success(),
+            "quick report failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            String::from_utf8_lossy(&o.stdout).lines().count() <= 1,
+            "progress never goes to stdout"
+        );
+        dir
+    })
+}
+
+fn files(dir: &Path, ext: &str) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == ext))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn every_section_reports_and_no_temporaries_remain() {
+    let dir = report();
+    let summary: serde_json::Value =
+        serde_json::from_slice(&fs::read(dir.join("summary.json")).unwrap()).unwrap();
+    let sections = summary["sections"].as_object().unwrap();
+    for p in PAPERS {
+        assert!(sections.contains_key(p), "summary.json lacks section {p}");
+    }
+    assert_eq!(summary["scale"], "quick");
+    assert_eq!(summary["seed"], 3);
+    for e in fs::read_dir(dir).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!name.starts_with('.'), "temporary left behind: {name}");
+    }
+}
+
+#[test]
+fn every_png_decodes_and_is_not_blank() {
+    let pngs = files(report(), "png");
+    assert!(pngs.len() >= 2, "figures: {pngs:?}");
+    for p in &pngs {
+        let img = image::open(p)
+            .unwrap_or_else(|e| panic!("{} does not decode: {e}", p.display()))
+            .to_rgb8();
+        let (w, h) = img.dimensions();
+        assert!(
+            (300..=4000).contains(&w) && (150..=4000).contains(&h),
+            "{}: {w}×{h}",
+            p.display()
+        );
+        let ink = img.pixels().filter(|px| px.0 != [255, 255, 255]).count();
+        let frac = ink as f64 / (w as f64 * h as f64);
+        assert!(
+            frac > 0.01,
+            "{} is nearly blank ({:.2}% ink)",
+            p.display(),
+            100.0 * frac
+        );
+        let shades: BTreeSet<[u8; 3]> = img.pixels().map(|px| px.0).collect();
+        assert!(
+            shades.len() > 4,
+            "{} has {} colours",
+            p.display(),
+            shades.len()
+        );
+    }
+}
+
+#[test]
+fn every_recording_loads_in_the_official_rerun_tools() {
+    if !cfg!(feature = "rrd") {
+        return;
+    }
+    let dir = report();
+    let rrds = files(dir, "rrd");
+    for p in PAPERS {
+        assert!(
+            rrds.iter()
+                .any(|r| r.file_name().unwrap() == format!("{p}.rrd").as_str()),
+            "no {p}.rrd among {rrds:?}"
+        );
+    }
+    for r in &rrds {
+        let bytes = fs::read(r).unwrap();
+        assert_eq!(&bytes[..4], b"RRF2", "{} magic bytes", r.display());
+    }
+    match std::env::var_os("PF_RERUN") {
+        Some(rerun) => {
+            let o = Command::new(&rerun)
+                .args(["rrd", "verify"])
+                .args(&rrds)
+                .output()
+                .expect("run the rerun CLI named by PF_RERUN");
+            assert!(
+                o.status.success(),
+                "rerun rrd verify failed: {}{}",
+                String::from_utf8_lossy(&o.stdout),
+                String::from_utf8_lossy(&o.stderr)
+            );
+        }
+        None => eprintln!(
+            "PF_RERUN is not set: recordings checked for their magic bytes only \
+             (scripts/test.sh sets it)"
+        ),
+    }
+}
+
+#[test]
+fn pages_carry_every_figure_and_need_no_network() {
+    let dir = report();
+    let html = fs::read_to_string(dir.join("index.html")).unwrap();
+    let md = fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    for p in files(dir, "png") {
+        let name = p.file_name().unwrap().to_string_lossy().into_owned();
+        if html.contains(&format!("alt=\"{name}\"")) {
+            assert!(md.contains(&format!("]({name})")), "REPORT.md lacks {name}");
+        } else {
+            // Table images: the pages carry the table as text and list the image.
+            assert!(
+                html.contains(&format!("<code>{name}</code>")),
+                "index.html neither shows nor lists {name}"
+            );
+        }
+    }
+    assert!(
+        html.contains("data:image/png;base64,"),
+        "figures are embedded"
+    );
+    for banned in ["<script", "http://", "https://", "<link"] {
+        assert!(!html.contains(banned), "index.html contains {banned}");
+    }
+    for p in PAPERS {
+        assert!(
+            html.contains(&format!("id=\"{p}\"")),
+            "index.html lacks {p}"
+        );
+    }
+}

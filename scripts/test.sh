@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The project's test command (the README shows it): the whole test suite, including a quick
+# `pf-viz report` whose PNGs are decoded and whose `.rrd` recordings are verified by the
+# official Rerun tools of the same version as the rerun crate.
+#
+# The Rerun tools are the PyPI package `rerun-sdk`, installed once into a virtual environment
+# under ~/.cache/pf-tools (override with PF_TOOLS). cargo's target directory defaults to
+# ~/.cache/pf-target, outside the clone, so later runs reuse the compiled dependencies.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$HOME/.cache/pf-target}"
+
+# The rerun crate's version, as Cargo.lock pins it.
+version="$(awk '$0 == "name = \"rerun\"" { getline; gsub(/[^0-9.]/, ""); print; exit }' Cargo.lock)"
+if [ -z "$version" ]; then
+  echo "scripts/test.sh: cannot find the rerun crate's version in Cargo.lock" >&2
+  exit 1
+fi
+venv="${PF_TOOLS:-$HOME/.cache/pf-tools}/rerun-$version"
+if [ ! -x "$venv/bin/rerun" ]; then
+  echo "scripts/test.sh: installing rerun-sdk==$version into $venv" >&2
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install --quiet --disable-pip-version-check "rerun-sdk==$version"
+fi
+# pf-viz's report test runs `$PF_RERUN rrd verify` on every recording it writes.
+export PF_RERUN="$venv/bin/rerun"
+"$PF_RERUN" --version >&2
+
+cargo test --workspace
