@@ -25,7 +25,7 @@ fn main() -> Result<(), pf_epf::error::EpfError> {
                 };
                 let mut cfg = ComparisonConfig::new(sc, reps);
                 cfg.tracker.n_particles = 200;
-                cfg.tracker.spline = order;
+                cfg.tracker.energy_spline = order;
                 cfg.tracker.energy.e1_reference = e1;
                 cfg.methods = vec![Method::Epf, Method::EpfArgmin, Method::Nnsf];
                 let c = compare(&cfg, 1, Par::Rayon, &|| {})?;

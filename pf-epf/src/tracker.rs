@@ -47,8 +47,14 @@ pub struct TrackerConfig {
     pub r: f64,
     /// The choices left open in the energies.
     pub energy: EnergyConfig,
-    /// End behaviour of the B-spline dynamic model.
+    /// End behaviour of the B-spline dynamic model that moves the particles and centres
+    /// the gates (`Â(t)`).
     pub spline: SplineOrder,
+    /// End behaviour of the model behind E²'s predictions `Â₁(t+1)` and `Â₂(t+1)`. With
+    /// [`SplineOrder::Linear`] the triangle `(Â(t−1), y_j, Â₂(t+1))` is always straight
+    /// (`Â₂(t+1)` extends the chord through `y_j`), so E² would carry no information; the
+    /// quadratic end gives it the curvature the paper's Fig. 1c–d compares.
+    pub energy_spline: SplineOrder,
 }
 
 impl Default for TrackerConfig {
@@ -63,6 +69,7 @@ impl Default for TrackerConfig {
             r: 0.5,
             energy: EnergyConfig::default(),
             spline: SplineOrder::Linear,
+            energy_spline: SplineOrder::Quadratic,
         }
     }
 }
@@ -162,6 +169,8 @@ type TargetFilter = ParticleFilter<TargetModel, OptimalProposal, Resampler>;
 struct TargetState {
     pf: TargetFilter,
     dynamics: SplineDynamics,
+    /// The same control points under `energy_spline`, for E².
+    shape: SplineDynamics,
     /// `Â(t−2)`, `Â(t−1)`.
     a_tm2: Vec2,
     a_tm1: Vec2,
@@ -208,8 +217,10 @@ impl Tracker {
         let mut targets = Vec::with_capacity(init.targets().len());
         for t in init.targets() {
             let mut dynamics = SplineDynamics::new(cfg.spline);
+            let mut shape = SplineDynamics::new(cfg.energy_spline);
             for &(f, p) in &t.points {
                 dynamics.push(f as f64, p);
+                shape.push(f as f64, p);
             }
             let n = t.points.len();
             let (last_frame, x0) = t.points[n - 1];
@@ -223,6 +234,7 @@ impl Tracker {
             targets.push(TargetState {
                 pf,
                 dynamics,
+                shape,
                 a_tm2: t.points[n - 2].1,
                 a_tm1: x0,
                 last_frame,
@@ -303,7 +315,7 @@ impl Tracker {
             let t_prev = s.last_frame as f64;
             let d = s.dynamics.displacement(t_prev, dt);
             let a_t = s.a_tm1 + d;
-            let a1_tp1 = a_t + s.dynamics.displacement(frame as f64, dt);
+            let a1_tp1 = a_t + s.shape.displacement(frame as f64, dt);
             let (_, p) = moments(s.pf.particles(), s.pf.weights());
             let drift_var = r2 * s.dynamics.displacement_noise_factor(t_prev, dt);
             let sigma = p + Matrix2::identity() * (q2 * dt + r2 + drift_var);
@@ -316,7 +328,7 @@ impl Tracker {
                 a_t,
                 a1_tp1,
                 cov_inv,
-                dynamics: s.dynamics,
+                dynamics: s.shape,
                 t: frame as f64,
                 dt_next: dt,
             });
@@ -335,6 +347,7 @@ impl Tracker {
             s.pf.step(Some(&self.drift[k]), y.as_ref(), rng)?;
             if let Some(y) = y {
                 s.dynamics.push(frame as f64, y);
+                s.shape.push(frame as f64, y);
             }
             let (mean, _) = moments(s.pf.particles(), s.pf.weights());
             s.a_tm2 = s.a_tm1;

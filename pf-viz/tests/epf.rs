@@ -127,7 +127,7 @@ fn simulate_then_track_follows_the_contract() {
         // entirely, since clutter and the other targets keep frames present, but at most
         // 11 can be).
         assert!(!frames.is_empty() && frames.len() <= 11);
-        assert_eq!(frames[0].as_i64().unwrap() >= 2, true);
+        assert!(frames[0].as_i64().unwrap() >= 2);
         let tracks = v["tracks"].as_array().unwrap();
         assert_eq!(tracks.len(), 3);
         for (k, t) in tracks.iter().enumerate() {
