@@ -161,9 +161,8 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &RecPlot) -> Result<()> {
                 }
             }
             .map_err(&err)?;
-            anno.label(c.name.clone()).legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 30, y)], stroke)
-            });
+            anno.label(c.name.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 30, y)], stroke));
         }
         chart
             .configure_series_labels()

@@ -656,10 +656,14 @@ fn notes(scenarios: &[ScenarioResult], report: &mut SectionReport) {
         "Values the paper leaves unstated, chosen here: N = {} particles per target in the \
          report (500 on the command line), multinomial resampling when N_eff < {}·N, gate \
          mass P_G = {}, detection noise r = the scenario's (0.15 or 0.3), process noise q = \
-         0.3 (van–plane, walking men) or 1.0 per √frame (ants), the dynamic model's velocity \
-         from the last two associated detections (the B-spline's chord; the quadratic end \
-         amplifies detection noise √14-fold and lost more associations), a circumcircle \
-         counts as a straight line above {}× its triangle's longest side, and E³'s area is \
+         0.3 (van–plane, walking men) or 1.0 per √frame (ants). The dynamic model that moves \
+         the particles and centres the gates takes its velocity from the last two associated \
+         detections (the B-spline's chord: its quadratic end amplifies detection noise \
+         √14-fold and lost more associations); E²'s predictions Â₁(t+1), Â₂(t+1) use the \
+         quadratic end, since under constant velocity the triangle (Â(t−1), y_j, Â₂(t+1)) is \
+         always straight and E² would say nothing. A circumcircle counts as a straight line \
+         above {}× its triangle's longest side (turns under 14.5°; with 20×, ≈1.4°, E² \
+         followed the noise and EPF lost its edge on walking men and ants), and E³'s area is \
          floored at {}× the reference triangle's.",
         scenarios
             .first()

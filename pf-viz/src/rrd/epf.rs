@@ -3,7 +3,7 @@
 //! | entity | archetype | at frame `f` |
 //! |---|---|---|
 //! | `epf/<scenario>/scene/truth` | `LineStrips2D` | the true paths up to `f`, light grey |
-//! | `epf/<scenario>/scene/detections` | `Points2D` | the detections of `f` (clutter included), black |
+//! | `epf/<scenario>/scene/detections` | `Points2D` | the detections of `f` (clutter included), white |
 //! | `epf/<scenario>/<method>/particles/T<k>` | `Points2D` | target `k`'s particle cloud after the update |
 //! | `epf/<scenario>/<method>/tracks` | `LineStrips2D` | the estimated paths up to `f`, labelled `T<k>` |
 //! | `epf/<scenario>/<method>/associations` | `LineStrips2D` | estimate → associated detection |
@@ -23,7 +23,8 @@ use crate::error::Result;
 use crate::report::epf::{EpfReportResult, ScenarioResult};
 
 const TRUTH: [u8; 4] = [170, 170, 170, 255];
-const DETECTION: [u8; 4] = [20, 20, 20, 255];
+/// White: the viewer's background is dark.
+const DETECTION: [u8; 4] = [240, 240, 240, 255];
 /// Per-target colours (Rerun is interactive, so colour may carry the target).
 const TARGET: [[u8; 4]; 6] = [
     [31, 119, 180, 255],
