@@ -124,6 +124,11 @@ pub struct MethodSummary {
     pub ospa_mean: (f64, f64),
     /// Position errors per target, pooled over replications and frames (for REC curves).
     pub errors_per_target: Vec<Vec<f64>>,
+    /// Per replication, whether every target took its own detection at the scenario's key
+    /// frame `t` (the paper's claim for its Figs. 2–4).
+    pub key_frame_right: Vec<bool>,
+    /// The fraction of replications with every association right at the key frame.
+    pub key_frame_right_rate: f64,
 }
 
 /// The comparison's results.
@@ -138,6 +143,7 @@ pub struct Comparison {
 }
 
 struct RunOutcome {
+    key_frame_right: bool,
     error_rate: f64,
     rmse: f64,
     ospa: f64,
@@ -174,7 +180,19 @@ pub fn compare(
                     &mut trng,
                 )?;
                 let errors = position_errors(&res, &sim)?;
+                let key = cfg.scenario.scenario.key_frame();
+                let key_frame_right = match res.frames.iter().position(|&f| f == key) {
+                    Some(i) => res.tracks.iter().all(|t| {
+                        let rows = sim.detections.frame_rows(key);
+                        let truth = rows
+                            .clone()
+                            .find(|&j| sim.detections.rows()[j].target == Some(t.target));
+                        t.detection[i] == truth
+                    }),
+                    None => false,
+                };
                 Ok(RunOutcome {
+                    key_frame_right,
                     error_rate: association_errors(&res, &sim.detections).rate(),
                     rmse: rmse_of(&errors)?,
                     ospa: mean_ospa(&res, &sim, cfg.ospa_c, cfg.ospa_p)?,
@@ -203,8 +221,13 @@ pub fn compare(
                         .collect()
                 })
                 .collect();
+            let key_frame_right: Vec<bool> = runs.iter().map(|r| r[i].key_frame_right).collect();
+            let key_frame_right_rate = key_frame_right.iter().filter(|&&b| b).count() as f64
+                / key_frame_right.len().max(1) as f64;
             MethodSummary {
                 method,
+                key_frame_right,
+                key_frame_right_rate,
                 error_rate_mean: mean_and_se(&error_rate),
                 rmse_mean: mean_and_se(&rmse),
                 ospa_mean: mean_and_se(&ospa),
