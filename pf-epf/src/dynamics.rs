@@ -1,8 +1,8 @@
-//! The adaptive dynamic model (Section 1 and EPF step 2, ref. [4]): a target moves with a
+//! The adaptive dynamic model (Section 1 and EPF step 2, ref. \[4\]): a target moves with a
 //! velocity `v` and an acceleration `a` that are re-estimated from the spline through its
 //! associated observations each time one is associated.
 //!
-//! Ref. [4] (El Abed et al. 2006) fits a cubic B-spline whose control points are the
+//! Ref. \[4\] (El Abed et al. 2006) fits a cubic B-spline whose control points are the
 //! available observations; the paper gives no formula. We take the spline's end derivatives
 //! from its last three control points `(τ₀, P₀), (τ₁, P₁), (τ₂, P₂)` with knots at the
 //! observation frames: the local quadratic through them, differentiated at `τ₂`,

@@ -10,7 +10,7 @@
 //! | Section 2, Fig. 1: circumcircles, intersection areas | [`geometry`] |
 //! | Section 2: E¹, E², E³ and eq. (1) | [`energy`] |
 //! | Section 3 step 1: gates, energy minimisation, NNSF | [`association`], [`assignment`] |
-//! | Section 1 and step 2: B-spline dynamic-model update (ref. [4]) | [`dynamics`] |
+//! | Section 1 and step 2: B-spline dynamic-model update (ref. \[4\]) | [`dynamics`] |
 //! | Section 3 steps 3–6: one particle filter per target | [`model`], [`tracker`] |
 //! | Section 4: van–plane, walking men, ants | [`scenario`], [`experiments`] |
 //! | Fig. 4c: REC curves; RMSE, association error rate, OSPA | [`metrics`] |
@@ -46,3 +46,8 @@ pub mod metrics;
 pub mod model;
 pub mod scenario;
 pub mod tracker;
+
+/// The README's example, compiled and run as a doctest.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
