@@ -182,6 +182,18 @@ fn energies_follow_the_contract() {
             }
         }
     }
+    // E is eq. (1) of the three weighted components.
+    for k in 0..2 {
+        for j in 0..m {
+            let c = |key: &str| v[key][k][j].as_f64().unwrap();
+            let e = ((c("E1").powi(2) + c("E2").powi(2) + c("E3").powi(2)) / 3.0).sqrt();
+            assert!(
+                (c("E") - e).abs() < 1e-12,
+                "E = {} against eq. (1) {e}",
+                c("E")
+            );
+        }
+    }
     // α₁E¹ sums to 1 over the targets for each detection (E¹ > 0 here).
     for j in 0..m {
         let sum: f64 = (0..2).map(|k| v["E1"][k][j].as_f64().unwrap()).sum();
