@@ -175,3 +175,82 @@ impl Init {
             .unwrap_or(i64::MIN)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn det(frame: i64, x: f64) -> Detection {
+        Detection {
+            frame,
+            position: Vec2::new(x, 0.0),
+            target: None,
+        }
+    }
+
+    fn row(target: i64, frame: i64) -> InitRow {
+        InitRow {
+            target,
+            frame,
+            position: Vec2::zeros(),
+        }
+    }
+
+    #[test]
+    fn detections_are_validated_and_indexed_by_frame() {
+        let d = Detections::new(vec![det(2, 0.0), det(2, 1.0), det(5, 2.0)]).unwrap();
+        assert_eq!(d.frames(), [2, 5]);
+        assert_eq!(d.frame_rows(2), 0..2);
+        assert_eq!(d.frame_rows(3), 2..2);
+        assert_eq!(d.frame_rows(5), 2..3);
+        let e = Detections::new(vec![det(3, 0.0), det(2, 0.0)]).unwrap_err();
+        assert_eq!(
+            e,
+            EpfError::FrameBackwards {
+                file: "detections",
+                row: 1,
+                frame: 2,
+                previous: 3
+            }
+        );
+        assert!(matches!(
+            Detections::new(vec![det(1, f64::NAN)]),
+            Err(EpfError::NonFiniteData {
+                row: 0,
+                what: "x",
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn init_needs_two_increasing_frames_per_target() {
+        let init = Init::new(&[row(7, 0), row(3, 0), row(7, 1), row(3, 2)]).unwrap();
+        assert_eq!(init.targets().len(), 2);
+        assert_eq!(init.targets()[0].id, 7, "order of first appearance");
+        assert_eq!(init.last_frame(), 2);
+        assert_eq!(
+            Init::new(&[row(1, 0), row(1, 1), row(2, 1)]).unwrap_err(),
+            EpfError::TooFewInitFrames {
+                target: 2,
+                frames: 1
+            }
+        );
+        assert!(matches!(
+            Init::new(&[row(1, 1), row(1, 0)]),
+            Err(EpfError::FrameBackwards {
+                file: "init",
+                row: 1,
+                ..
+            })
+        ));
+        assert!(matches!(
+            Init::new(&[row(1, 1), row(1, 1)]),
+            Err(EpfError::DuplicateInitFrame {
+                target: 1,
+                frame: 1
+            })
+        ));
+        assert_eq!(Init::new(&[]).unwrap_err(), EpfError::NoTargets);
+    }
+}

@@ -7,6 +7,7 @@
 //!
 //! | paper | module |
 //! |---|---|
+//! | input: unlabelled detections per frame, each target's first positions | [`data`] |
 //! | Section 2, Fig. 1: circumcircles, intersection areas | [`geometry`] |
 //! | Section 2: E¹, E², E³ and eq. (1) | [`energy`] |
 //! | Section 3 step 1: gates, energy minimisation, NNSF | [`association`], [`assignment`] |
