@@ -85,7 +85,8 @@ pub struct TargetRec {
 pub struct ScenarioResult {
     /// The scenario.
     pub scenario: Scenario,
-    /// The comparison per variant (per-replication numbers and pooled errors).
+    /// The comparison per variant: means and standard errors, per-run error rates (the
+    /// pooled errors, per-run RMSE, OSPA and key-frame flags are dropped once used).
     pub comparisons: Vec<Comparison>,
     /// REC curves of the clean variant, per method and target.
     pub rec: Vec<TargetRec>,
@@ -157,7 +158,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         scenarios.push(r);
     }
     notes(&scenarios, &mut report);
-    let result = EpfReportResult {
+    let mut result = EpfReportResult {
         config: cfg,
         seed: ctx.seed,
         scenarios,
@@ -167,6 +168,16 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         {
             crate::rrd::epf::save(&ctx.path("epf.rrd"), &result)?;
             report.files.push("epf.rrd".into());
+        }
+    }
+    // The particle clouds are for the recording only.
+    for s in &mut result.scenarios {
+        for (_, r) in &mut s.example {
+            for f in &mut r.records {
+                for t in &mut f.targets {
+                    t.particles.clear();
+                }
+            }
         }
     }
     report.result = to_json(ctx, &result)?;
@@ -283,6 +294,17 @@ fn run_scenario(
         &mut stream_rng(ctx.seed, 60 + si as u64),
     )
     .map_err(paper)?;
+    // The pooled errors are behind the REC curves, which are kept, and the tables show
+    // means and standard errors; dropping the raw per-run vectors (all but the error
+    // rates) keeps summary.json to a few MB at the default scale.
+    for c in &mut comparisons {
+        for m in &mut c.methods {
+            m.errors_per_target.clear();
+            m.rmse.clear();
+            m.ospa.clear();
+            m.key_frame_right.clear();
+        }
+    }
     let frames_file = format!("epf-{}-frames.png", s.name());
     frames_figure(ctx, s, &sim, &example, &frames_file)?;
 
