@@ -70,6 +70,15 @@ pub struct EnergyConfig {
     /// Floor on the triangle intersection `S`, as a fraction of the reference triangle's
     /// area, so that `E³ = 1/S` stays finite. Default 1e-3.
     pub e3_floor: f64,
+    /// Which of `E¹, E², E³` enter eq. (1); a component left out counts as 0 for every
+    /// pair (for ablations such as the paper's "necessity of using the energy E³"). Default
+    /// all three.
+    #[serde(default = "all_components")]
+    pub components: [bool; 3],
+}
+
+fn all_components() -> [bool; 3] {
+    [true; 3]
 }
 
 impl Default for EnergyConfig {
@@ -78,6 +87,7 @@ impl Default for EnergyConfig {
             e1_reference: E1Reference::Previous,
             radius_cap: 2.0,
             e3_floor: 1e-3,
+            components: all_components(),
         }
     }
 }
@@ -186,7 +196,13 @@ pub fn components(g: &TargetGeometry, y: &Vec2, cfg: &EnergyConfig) -> [f64; 3] 
         let s = triangle_intersection_area(&[g.a_tm2, g.a_tm1, *y], &[g.a_tm2, g.a_tm1, g.a_t]);
         1.0 / s.max(cfg.e3_floor * area_ref)
     };
-    [e1, e2, e3].map(|e| if e.is_finite() { e } else { f64::MAX })
+    let mut e = [e1, e2, e3].map(|e| if e.is_finite() { e } else { f64::MAX });
+    for (e, used) in e.iter_mut().zip(cfg.components) {
+        if !used {
+            *e = 0.0;
+        }
+    }
+    e
 }
 
 /// The K × M energies of every target against every detection of one frame: raw

@@ -22,10 +22,25 @@ pub enum Method {
     Nnsf,
     /// Nearest neighbour to the dynamic model's prediction `Â(t)` (not in the paper).
     NnPredicted,
+    /// EPF with E² left out of eq. (1) (ablation).
+    EpfWithoutE2,
+    /// EPF with E³ left out of eq. (1) (ablation: Table 2's "necessity of E³").
+    EpfWithoutE3,
+    /// EPF with E¹ alone: NNSF's distance under the global assignment (ablation).
+    EpfE1Only,
 }
 
 impl Method {
-    /// Every method, EPF first.
+    /// The ablations of eq. (1), EPF first and NNSF last.
+    pub const ABLATIONS: [Method; 5] = [
+        Method::Epf,
+        Method::EpfWithoutE2,
+        Method::EpfWithoutE3,
+        Method::EpfE1Only,
+        Method::Nnsf,
+    ];
+
+    /// EPF, its argmin variant and both nearest-neighbour filters.
     pub const ALL: [Method; 4] = [
         Method::Epf,
         Method::EpfArgmin,
@@ -40,6 +55,9 @@ impl Method {
             Method::EpfArgmin => "EPF (argmin)",
             Method::Nnsf => "NNSF",
             Method::NnPredicted => "NN to Â(t)",
+            Method::EpfWithoutE2 => "EPF without E²",
+            Method::EpfWithoutE3 => "EPF without E³",
+            Method::EpfE1Only => "EPF with E¹ only",
         }
     }
 
@@ -53,6 +71,18 @@ impl Method {
             Method::NnPredicted => {
                 c.association = Association::Nearest;
                 c.energy.e1_reference = E1Reference::Predicted;
+            }
+            Method::EpfWithoutE2 => {
+                c.association = Association::Energy;
+                c.energy.components = [true, false, true];
+            }
+            Method::EpfWithoutE3 => {
+                c.association = Association::Energy;
+                c.energy.components = [true, true, false];
+            }
+            Method::EpfE1Only => {
+                c.association = Association::Energy;
+                c.energy.components = [true, false, false];
             }
         }
         c

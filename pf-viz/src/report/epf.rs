@@ -85,6 +85,8 @@ pub struct TargetRec {
 pub struct ScenarioResult {
     /// The scenario.
     pub scenario: Scenario,
+    /// The ablation of eq. (1) on the clean scenario (EPF with components left out).
+    pub ablation: Comparison,
     /// The comparison per variant: means and standard errors, per-run error rates (the
     /// pooled errors, per-run RMSE, OSPA and key-frame flags are dropped once used).
     pub comparisons: Vec<Comparison>,
@@ -197,7 +199,7 @@ fn run_scenario(
     // The comparisons.
     let bar = ctx.progress.bar(
         &format!("epf {}", s.name()),
-        (cfg.replications * cfg.variants.len()) as u64,
+        (cfg.replications * (cfg.variants.len() + 1)) as u64,
     );
     let mut comparisons = Vec::new();
     for (vi, &(clutter, miss)) in cfg.variants.iter().enumerate() {
@@ -218,6 +220,18 @@ fn run_scenario(
             .wrapping_add(100 * vi as u64);
         comparisons.push(compare(&cc, seed, Par::Rayon, &|| bar.inc(1)).map_err(paper)?);
     }
+    // The ablation of eq. (1) on the clean scenario.
+    let ablation = compare(
+        &ComparisonConfig {
+            tracker,
+            methods: Method::ABLATIONS.to_vec(),
+            ..ComparisonConfig::new(ScenarioConfig::new(s), cfg.replications)
+        },
+        ctx.seed.wrapping_add(1000 * si as u64).wrapping_add(900),
+        Par::Rayon,
+        &|| bar.inc(1),
+    )
+    .map_err(paper)?;
     bar.finish_and_clear();
 
     // REC curves of the clean variant: EPF and NNSF per target.
@@ -297,7 +311,8 @@ fn run_scenario(
     // The pooled errors are behind the REC curves, which are kept, and the tables show
     // means and standard errors; dropping the raw per-run vectors (all but the error
     // rates) keeps summary.json to a few MB at the default scale.
-    for c in &mut comparisons {
+    let mut ablation = ablation;
+    for c in comparisons.iter_mut().chain(std::iter::once(&mut ablation)) {
         for m in &mut c.methods {
             m.errors_per_target.clear();
             m.rmse.clear();
@@ -338,8 +353,10 @@ fn run_scenario(
     });
     report.tables.push(energy_table(s, &sim, &energies));
     report.tables.push(error_table(s, &comparisons));
+    report.tables.push(ablation_table(s, &ablation));
     Ok(ScenarioResult {
         scenario: s,
+        ablation,
         comparisons,
         rec,
         energies,
@@ -659,6 +676,53 @@ fn error_table(s: Scenario, comparisons: &[Comparison]) -> Table {
     }
 }
 
+fn ablation_table(s: Scenario, c: &Comparison) -> Table {
+    let rows = c
+        .methods
+        .iter()
+        .map(|m| {
+            let paper = match m.method {
+                Method::Epf => "all right at t",
+                Method::EpfWithoutE2 if s == Scenario::Ants => {
+                    "E² and E³ outweigh E¹ for M₂ (Table 2)"
+                }
+                Method::EpfWithoutE3 if s == Scenario::Ants => "M₅ → T₆, wrong (Table 2)",
+                Method::EpfE1Only | Method::Nnsf => "wrong at t",
+                _ => "–",
+            };
+            vec![
+                m.method.label().to_string(),
+                format!("{:.3} ± {:.3}", m.error_rate_mean.0, m.error_rate_mean.1),
+                format!("{:.0} %", 100.0 * m.key_frame_right_rate),
+                paper.to_string(),
+            ]
+        })
+        .collect();
+    Table {
+        id: format!("{}-ablation", s.name()),
+        caption: format!(
+            "{}: which energies matter. EPF with E² or E³ left out of eq. (1), and with E¹ \
+             alone (NNSF's distance under the global assignment), on {} runs of the clean \
+             scenario: association error rate (mean ± standard error) and the fraction of \
+             runs with every association right at t = {}. The paper argues each component \
+             from single cases of its Table 2.",
+            title(s),
+            c.config.replications,
+            s.key_frame()
+        ),
+        header: [
+            "method",
+            "association error rate",
+            "all right at t",
+            "paper",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect(),
+        rows,
+    }
+}
+
 fn notes(scenarios: &[ScenarioResult], report: &mut SectionReport) {
     let tc = TrackerConfig::default();
     report.notes.push(
@@ -727,6 +791,36 @@ fn notes(scenarios: &[ScenarioResult], report: &mut SectionReport) {
             parts.join("; ")
         ));
     }
+    let mut parts = Vec::new();
+    for s in scenarios {
+        let rate = |m: Method| {
+            s.ablation
+                .methods
+                .iter()
+                .find(|x| x.method == m)
+                .map_or(f64::NAN, |x| x.error_rate_mean.0)
+        };
+        parts.push(format!(
+            "{}: EPF {:.3}, without E² {:.3}, without E³ {:.3}, E¹ only {:.3}, NNSF {:.3}",
+            title(s.scenario),
+            rate(Method::Epf),
+            rate(Method::EpfWithoutE2),
+            rate(Method::EpfWithoutE3),
+            rate(Method::EpfE1Only),
+            rate(Method::Nnsf)
+        ));
+    }
+    report.notes.push(format!(
+        "Ablation of eq. (1), association error rates: {}. At the default scale (seed 1) E³ \
+         changes nothing measurable: with motion that turns by less than 14.5° between \
+         observations its reference triangle is straight and E³ = 0, and where it is not, \
+         the other components already decide. E² helps where targets move straight and \
+         cross (van–plane, walking men) and hurts on the erratic, sparsely observed ants, \
+         where E¹ alone under the global assignment does best: the gain over NNSF there \
+         comes from the one-to-one assignment, not from the geometry. The paper argues for \
+         E² and E³ from single detections of its Table 2 and reports no such average.",
+        parts.join("; ")
+    ));
     report.notes.push(
         "Ants with heavy clutter (3 per frame, 20 % misses) is the one case where EPF does \
          worse than NNSF. Counting the failures over 300 runs (N = 200; `cargo run --release \
