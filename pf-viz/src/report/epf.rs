@@ -243,7 +243,12 @@ fn run_scenario(
         .filter(|m| shown.contains(&m.method))
         .flat_map(|m| m.errors_per_target.iter().flatten().copied())
         .fold(0.0, f64::max);
-    let grid = tolerance_grid(max_err.max(1e-9), cfg.rec_points);
+    let mut grid = tolerance_grid(max_err.max(1e-9), cfg.rec_points);
+    // `max·(m−1)/(m−1)` can round one ulp below the largest error; end exactly on it so
+    // every curve reaches 1.
+    if let Some(last) = grid.last_mut() {
+        *last = max_err.max(1e-9);
+    }
     let mut rec = Vec::new();
     for m in clean.methods.iter().filter(|m| shown.contains(&m.method)) {
         for (k, errs) in m.errors_per_target.iter().enumerate() {
