@@ -597,7 +597,7 @@ fn energy_table(s: Scenario, sim: &Simulation, t: &EnergyTable) -> Table {
         caption: format!(
             "{}: the weighted energies α₁E¹, α₂E², α₃E³ and their magnitude E (eq. (1)) of every \
              target × detection at frame t = {} of the example run (the style of the paper's \
-             {}). M_j is T_j's detection. \"E (paper)\" is the paper's value for the same \
+             {}). M1, M2, … are the detections of T1, T2, …. \"E (paper)\" is the paper's value for the same \
              pair on its own video, which we do not have: compare the pattern (the smallest \
              E per row on the true pair), not the digits. The last column marks the EPF \
              assignment.",
