@@ -189,8 +189,28 @@ fn bad_arguments_are_rejected() {
         &["frobnicate"][..],
     ] {
         let o = pf_viz(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?} should fail");
+        let stderr = String::from_utf8(o.stderr).unwrap();
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: one line: {stderr:?}");
+        assert!(stderr.starts_with("error: "), "{args:?}: {stderr:?}");
+    }
+    // A missing required argument is named on that one line.
+    let o = pf_viz(&["report"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--out"));
+    // Report-specific meaning checks: an unknown section, zero jobs.
+    for (args, needle) in [
+        (
+            &["report", "--out", "x", "--only", "smooth,bogus"][..],
+            "bogus",
+        ),
+        (&["report", "--out", "x", "--jobs", "0"][..], "--jobs"),
+        (&["report", "--out", "x", "--scale", "huge"][..], "huge"),
+    ] {
+        let o = pf_viz(args);
         assert!(!o.status.success(), "{args:?} should fail");
-        assert!(!o.stderr.is_empty(), "{args:?} should explain");
+        let stderr = String::from_utf8(o.stderr).unwrap();
+        assert_eq!(stderr.lines().count(), 1, "{args:?}: one line: {stderr:?}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr:?}");
     }
     assert!(!Path::new("x").exists(), "no output for rejected arguments");
 }
