@@ -505,7 +505,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     notes.push(
         "The data are our own simulation of the paper's model (φ = 0.98, σ = 0.2, ρ = 1, \
          n = 500), so the exact EM update differs from the paper's printed value; the \
-         comparison is between estimators on the same data. Resampling is systematic at
+         comparison is between estimators on the same data. Resampling is systematic at \
          every step (the paper's bootstrap filter resamples at every step)."
             .into(),
     );
