@@ -283,9 +283,14 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     let notes = vec![
         format!(
             "Ordering at the final time: UKF-LPC {:.0} m, PF {:.0} m, OHF {:.0} m, AOHF {:.0} m \
-             (over {} realisations). The paper reports OHF and AOHF beating UKF-LPC; the \
-             pf-homotopy README records where ours agrees and where not, and why (the \
-             paper's eq. (26) as printed has a sign error, which we correct).",
+             (over {} realisations). The paper reports OHF and AOHF beating UKF-LPC; ours \
+             do not. What is measured (pf-homotopy README): the gap opens before the \
+             manoeuvre, when the error is the prior's, and our OHF carries a Cartesian \
+             Gaussian moment-matched to the very diffuse polar prior while the UKF-LPC's \
+             log-range Gaussian represents it far better (the paper does not say how its OHF \
+             was initialised); the OHF is not converged in λ at 60 steps (see the \
+             ablation); the AHΔE converges to a different flow's limit. The sign of (26) as \
+             printed is corrected (derivation in the crate docs).",
             r.rmse.ukf_lpc[last],
             r.rmse.pf[last],
             r.rmse.ohf[last],
