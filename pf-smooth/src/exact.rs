@@ -47,8 +47,8 @@ pub fn exact_statistics(data: &Ar1Data, theta: &Theta) -> Result<SuffStats> {
     for k in 1..=n {
         tau[2] += second(k);
     }
-    for k in 0..=n {
-        let e = y[k] - m(k);
+    for (k, &yk) in y.iter().enumerate().take(n + 1) {
+        let e = yk - m(k);
         tau[3] += e * e + sm.covs[k][(0, 0)];
     }
     Ok(SuffStats { n, tau })
