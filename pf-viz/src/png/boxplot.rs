@@ -206,15 +206,7 @@ pub fn render(path: &Path, plot: &BoxPlot) -> Result<()> {
                 });
         }
         if !plot.ref_lines.is_empty() {
-            chart
-                .configure_series_labels()
-                .position(plot.legend.to_plotters())
-                .margin(12)
-                .label_font(style::text(style::LEGEND_PX))
-                .background_style(WHITE.mix(0.88))
-                .border_style(style::MID_GREY)
-                .draw()
-                .map_err(&err)?;
+            style::draw_legend(&mut chart, path, plot.legend, style::AxisFonts::FULL)?;
         }
         Ok(())
     })

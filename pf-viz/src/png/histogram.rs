@@ -9,7 +9,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::render_png;
-use super::style::{self, plot_err};
+use super::style::{self, AxisFonts, LegendPos, plot_err};
 use crate::error::{Result, VizError};
 
 /// A histogram: `counts[i]` samples in `[edges[i], edges[i+1])`.
@@ -92,19 +92,13 @@ pub fn render(path: &Path, plot: &HistogramPlot) -> Result<()> {
             .y_label_area_size(style::Y_LABEL_AREA_PX)
             .build_cartesian_2d(x_lo..x_hi, 0.0..top)
             .map_err(&err)?;
-        chart
-            .configure_mesh()
-            .x_desc(&plot.x_label)
-            .y_desc("number of samples")
-            .axis_desc_style(style::text(style::LABEL_PX))
-            .label_style(style::text(style::TICK_PX))
-            .x_label_formatter(&|x| style::tick_label(*x))
-            .y_label_formatter(&|y| style::tick_label(*y))
-            .bold_line_style(style::GRID.stroke_width(1))
-            .light_line_style(WHITE.stroke_width(0))
-            .axis_style(style::INK.stroke_width(1))
-            .draw()
-            .map_err(&err)?;
+        style::draw_mesh(
+            &mut chart,
+            path,
+            &plot.x_label,
+            "number of samples",
+            AxisFonts::FULL,
+        )?;
         chart
             .draw_series(plot.counts.iter().enumerate().map(|(i, &c)| {
                 Rectangle::new(
@@ -141,15 +135,7 @@ pub fn render(path: &Path, plot: &HistogramPlot) -> Result<()> {
                 });
         }
         if !plot.ref_lines.is_empty() {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .margin(12)
-                .label_font(style::text(style::LEGEND_PX))
-                .background_style(WHITE.mix(0.88))
-                .border_style(style::MID_GREY)
-                .draw()
-                .map_err(&err)?;
+            style::draw_legend(&mut chart, path, LegendPos::UpperLeft, AxisFonts::FULL)?;
         }
         let (w, _) = root.dim_in_pixel();
         let font = style::text(style::LEGEND_PX).pos(Pos::new(HPos::Right, VPos::Top));

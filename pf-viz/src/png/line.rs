@@ -7,7 +7,7 @@ use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::style::{self, Dash, LegendPos, Marker, plot_err};
+use super::style::{self, AxisFonts, Dash, LegendPos, Marker, plot_err};
 use super::{Canvas, render_png};
 use crate::error::{Result, VizError};
 
@@ -158,19 +158,13 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
         .y_label_area_size(style::Y_LABEL_AREA_PX)
         .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)
         .map_err(&err)?;
-    chart
-        .configure_mesh()
-        .x_desc(&plot.x_label)
-        .y_desc(&plot.y_label)
-        .axis_desc_style(style::text(style::LABEL_PX))
-        .label_style(style::text(style::TICK_PX))
-        .x_label_formatter(&|x| style::tick_label(*x))
-        .y_label_formatter(&|y| style::tick_label(*y))
-        .bold_line_style(style::GRID.stroke_width(1))
-        .light_line_style(WHITE.stroke_width(0))
-        .axis_style(style::INK.stroke_width(1))
-        .draw()
-        .map_err(&err)?;
+    style::draw_mesh(
+        &mut chart,
+        path,
+        &plot.x_label,
+        &plot.y_label,
+        AxisFonts::FULL,
+    )?;
 
     // Bands first, so every line stays visible on top of every band.
     for (j, s) in plot.series.iter().enumerate() {
@@ -252,17 +246,7 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
             .legend(move |(x, y)| DashedPathElement::new(vec![(x, y), (x + 30, y)], 3, 4, look));
     }
 
-    chart
-        .configure_series_labels()
-        .position(plot.legend.to_plotters())
-        .margin(12)
-        .legend_area_size(40)
-        .label_font(style::text(style::LEGEND_PX))
-        .background_style(WHITE.mix(0.88))
-        .border_style(style::MID_GREY)
-        .draw()
-        .map_err(&err)?;
-    Ok(())
+    style::draw_legend(&mut chart, path, plot.legend, AxisFonts::FULL)
 }
 
 #[cfg(test)]
