@@ -124,7 +124,17 @@ pub fn rec_curve(errors: &[f64], tolerances: &[f64]) -> Result<RecCurve> {
 /// `m` evenly spaced tolerances from 0 to `max`.
 pub fn tolerance_grid(max: f64, m: usize) -> Vec<f64> {
     let m = m.max(2);
-    (0..m).map(|i| max * i as f64 / (m - 1) as f64).collect()
+    // The last point is exactly `max` (the product can round one ulp below it, and a REC
+    // curve would then stop short of 1).
+    (0..m)
+        .map(|i| {
+            if i + 1 == m {
+                max
+            } else {
+                max * i as f64 / (m - 1) as f64
+            }
+        })
+        .collect()
 }
 
 /// Mean, standard deviation and largest magnitude of residuals.

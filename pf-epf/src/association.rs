@@ -13,9 +13,10 @@
 //! - **Energy, per measurement** ([`Association::EnergyPerMeasurement`]). Eq. (1) read
 //!   literally: `y_j → argmin_k E(k, y_j)` over the targets whose gate holds it; a target
 //!   given several keeps the one of least energy.
-//! - **NNSF** ([`Association::Nearest`]). Each target takes the validated detection nearest
-//!   (Mahalanobis) to the point E¹ measures from; two targets may take the same detection
-//!   (Li & Bar-Shalom 1996).
+//! - **NNSF** ([`Association::Nearest`]). Each detection goes to the validated target
+//!   whose prediction is nearest (the Mahalanobis distance of E¹, from the same point); a
+//!   target given several keeps the nearest (Li & Bar-Shalom 1996). This is how the paper
+//!   applies it in Section 4 ("NNSF would associate M₂ to T₁").
 
 use crate::assignment::Hungarian;
 use crate::energy::{EnergyConfig, EnergyMatrix, TargetGeometry};
@@ -88,6 +89,29 @@ pub fn gate_threshold(p_g: f64) -> Result<f64> {
     Ok(-2.0 * (-p_g).ln_1p())
 }
 
+/// `y_j → argmin_k cost(k, j)` over the targets whose gate holds `y_j` (ties to the lower
+/// `k`); a target given several detections keeps the one of least cost. `cost` and `gated`
+/// are K × M, row-major.
+fn per_measurement_argmin(
+    k: usize,
+    m: usize,
+    cost: &[f64],
+    gated: &[bool],
+    out: &mut [Option<usize>],
+) {
+    for j in 0..m {
+        let best = (0..k)
+            .filter(|&i| gated[i * m + j])
+            .min_by(|&a, &b| cost[a * m + j].total_cmp(&cost[b * m + j]));
+        if let Some(i) = best {
+            let c = cost[i * m + j];
+            if out[i].is_none_or(|jj| cost[i * m + jj] > c) {
+                out[i] = Some(j);
+            }
+        }
+    }
+}
+
 /// Association buffers, reused from frame to frame.
 #[derive(Debug, Clone, Default)]
 pub struct Associator {
@@ -138,37 +162,16 @@ impl Associator {
         }
         match method {
             Association::Nearest => {
-                for (i, g) in targets.iter().enumerate() {
+                // Each detection goes to the nearest validated prediction (E¹'s distance).
+                self.cost.clear();
+                for g in targets {
                     let c = g.e1_centre(cfg.e1_reference);
-                    let mut best = f64::INFINITY;
-                    for (j, y) in ys.iter().enumerate() {
-                        let d = g.mahalanobis_sq(&c, y);
-                        if self.gated[i * m + j] && d < best {
-                            best = d;
-                            out[i] = Some(j);
-                        }
-                    }
+                    self.cost.extend(ys.iter().map(|y| g.mahalanobis_sq(&c, y)));
                 }
+                per_measurement_argmin(k, m, &self.cost, &self.gated, out);
             }
             Association::EnergyPerMeasurement => {
-                let mut best = [f64::INFINITY; 1];
-                for j in 0..m {
-                    let mut arg = None;
-                    best[0] = f64::INFINITY;
-                    for i in 0..k {
-                        let e = self.energy.magnitude(i, j);
-                        if self.gated[i * m + j] && e < best[0] {
-                            best[0] = e;
-                            arg = Some(i);
-                        }
-                    }
-                    if let Some(i) = arg {
-                        let keep = out[i].is_none_or(|jj| self.energy.magnitude(i, jj) > best[0]);
-                        if keep {
-                            out[i] = Some(j);
-                        }
-                    }
-                }
+                per_measurement_argmin(k, m, self.energy.magnitudes(), &self.gated, out);
             }
             Association::Energy => {
                 // Columns: the M detections, then one "missed" column per target.
@@ -190,14 +193,101 @@ impl Associator {
                     .solve(k, w, &self.cost, &mut self.cols)
                     .is_some()
                 {
-                    for i in 0..k {
-                        let j = self.cols[i];
+                    for (i, (o, &j)) in out.iter_mut().zip(&self.cols).enumerate() {
                         if j < m && self.gated[i * m + j] {
-                            out[i] = Some(j);
+                            *o = Some(j);
                         }
                     }
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::{SplineDynamics, SplineOrder};
+    use nalgebra::Matrix2;
+
+    /// A target seen at frames 3, 4, 5 at `p`, predicted at 6 by its straight motion, with
+    /// covariance σ²I.
+    fn target(p: [Vec2; 3], sigma: f64) -> TargetGeometry {
+        let mut dynamics = SplineDynamics::new(SplineOrder::Quadratic);
+        for (i, x) in p.iter().enumerate() {
+            dynamics.push(3.0 + i as f64, *x);
+        }
+        let a_t = p[2] + dynamics.displacement(5.0, 1.0);
+        TargetGeometry {
+            a_tm2: p[1],
+            a_tm1: p[2],
+            a_t,
+            a1_tp1: a_t + dynamics.displacement(6.0, 1.0),
+            cov_inv: Matrix2::identity() / (sigma * sigma),
+            dynamics,
+            t: 6.0,
+            dt_next: 1.0,
+        }
+    }
+
+    fn run(targets: &[TargetGeometry], ys: &[Vec2], method: Association) -> Vec<Option<usize>> {
+        let mut out = vec![None; targets.len()];
+        Associator::new().associate(
+            targets,
+            ys,
+            gate_threshold(0.99).unwrap(),
+            method,
+            &EnergyConfig::default(),
+            &mut out,
+        );
+        out
+    }
+
+    /// Fig. 2: the plane's detection M₂ is √2 from the van's last position and 6 from the
+    /// plane's, so NNSF gives it to the van; both targets move straight, and only the true
+    /// pairing keeps both motions straight, so the energy gets it right.
+    #[test]
+    fn van_plane_energy_is_right_where_nnsf_must_fail() {
+        let v = Vec2::new;
+        let van = target([v(6.0, 0.0), v(8.0, 0.0), v(10.0, 0.0)], 0.6);
+        let plane = target([v(10.85, 19.0), v(10.9, 13.0), v(10.95, 7.0)], 0.6);
+        let ys = [v(12.0, 0.0), v(11.0, 1.0)];
+        // The construction: M₂ is nearer the van's Â(t−1) than the plane's.
+        assert!((ys[1] - van.a_tm1).norm() < (ys[1] - plane.a_tm1).norm());
+        let targets = [van, plane];
+        let nn = run(&targets, &ys, Association::Nearest);
+        assert_eq!(nn, [Some(1), None], "NNSF gives M₂ to the van");
+        for m in [Association::Energy, Association::EnergyPerMeasurement] {
+            assert_eq!(run(&targets, &ys, m), [Some(0), Some(1)], "{m:?}");
+        }
+    }
+
+    /// Fig. 3: T₂ and T₃ converge and cross; at t their detections are a metre apart and
+    /// each is nearer the *other* man's last position (the occlusion makes them almost
+    /// equidistant), so NNSF swaps or drops them; T₁ walks elsewhere.
+    #[test]
+    fn walking_men_energy_is_right_where_nnsf_must_fail() {
+        let v = Vec2::new;
+        let t1 = target([v(10.0, 7.0), v(11.5, 7.6), v(12.5, 8.2)], 0.7);
+        let t2 = target([v(6.0, 3.0), v(8.0, 2.0), v(10.0, 1.0)], 0.7);
+        let t3 = target([v(7.0, -3.0), v(9.0, -2.0), v(11.0, -1.0)], 0.7);
+        let ys = [v(13.4, 8.8), v(12.0, 0.0), v(13.0, 0.0)];
+        // M₂ (T₂'s) is nearer T₃'s last position than T₂'s.
+        assert!((ys[1] - t3.a_tm1).norm() < (ys[1] - t2.a_tm1).norm());
+        let targets = [t1, t2, t3];
+        let nn = run(&targets, &ys, Association::Nearest);
+        assert_ne!(nn[1], Some(1), "NNSF must not give T₂ its own detection");
+        assert_ne!(nn[2], Some(2), "NNSF must not give T₃ its own detection");
+        for m in [Association::Energy, Association::EnergyPerMeasurement] {
+            assert_eq!(run(&targets, &ys, m), [Some(0), Some(1), Some(2)], "{m:?}");
+        }
+    }
+
+    #[test]
+    fn gate_threshold_is_the_chi2_quantile() {
+        // χ²₂ CDF 1 − e^{−γ/2}: P_G = 1 − e^{−1} ⇔ γ = 2.
+        assert!((gate_threshold(1.0 - (-1f64).exp()).unwrap() - 2.0).abs() < 1e-12);
+        assert!(gate_threshold(1.0).is_err());
+        assert!(gate_threshold(0.0).is_err());
     }
 }

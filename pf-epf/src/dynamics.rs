@@ -1,8 +1,8 @@
-//! The adaptive dynamic model (Section 1 and EPF step 2, ref. [4]): a target moves with a
+//! The adaptive dynamic model (Section 1 and EPF step 2, ref. \[4\]): a target moves with a
 //! velocity `v` and an acceleration `a` that are re-estimated from the spline through its
 //! associated observations each time one is associated.
 //!
-//! Ref. [4] (El Abed et al. 2006) fits a cubic B-spline whose control points are the
+//! Ref. \[4\] (El Abed et al. 2006) fits a cubic B-spline whose control points are the
 //! available observations; the paper gives no formula. We take the spline's end derivatives
 //! from its last three control points `(τ₀, P₀), (τ₁, P₁), (τ₂, P₂)` with knots at the
 //! observation frames: the local quadratic through them, differentiated at `τ₂`,
@@ -10,8 +10,11 @@
 //! `a = 2·P[τ₂, τ₁, τ₀]`, `v = P[τ₂, τ₁] + P[τ₂, τ₁, τ₀]·(τ₂ − τ₁)` (divided differences),
 //!
 //! which is exact for uniformly accelerated motion at any frame spacing (on uniform knots it
-//! is the second-order backward difference). With two control points `a = 0` and `v` is the
-//! chord's slope. See the crate README for why this reading.
+//! is the second-order backward difference). With two control points, or with
+//! [`SplineOrder::Linear`] (the default), `a = 0` and `v` is the last chord's slope: the
+//! quadratic end multiplies the detection noise by √14 when it extrapolates one spacing
+//! ahead, against √2 for the chord, and on our scenarios that noise costs more
+//! associations than the curvature it captures (see the crate README).
 
 use crate::geometry::Vec2;
 use serde::{Deserialize, Serialize};
@@ -20,10 +23,12 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SplineOrder {
-    /// Constant velocity from the last two control points (`a = 0`).
+    /// Constant velocity from the last two control points (`a = 0`); the default, because
+    /// the quadratic's extrapolation multiplies detection noise by √14 at unit spacing
+    /// (see [`SplineDynamics::displacement_noise_factor`]).
+    #[default]
     Linear,
     /// Velocity and acceleration from the last three control points.
-    #[default]
     Quadratic,
 }
 
@@ -115,6 +120,34 @@ impl SplineDynamics {
         }
     }
 
+    /// How much detection noise the displacement carries: `d = P(t + Δ) − P(t)` with `P`
+    /// the polynomial through the control points used (the last two for
+    /// [`SplineOrder::Linear`], three for [`SplineOrder::Quadratic`]), so
+    /// `d = Σ_i c_i P_i` with `c_i = L_i(t + Δ) − L_i(t)` (Lagrange basis), and independent
+    /// detection noise of variance `r²` per coordinate gives `Var d = r² Σ_i c_i²`. Returns
+    /// `Σ_i c_i²` (0 with fewer than two points). It widens the gate around `Â(t)`.
+    pub fn displacement_noise_factor(&self, t: f64, dt: f64) -> f64 {
+        let used = match (self.order, self.len) {
+            (_, 0 | 1) => return 0.0,
+            (SplineOrder::Linear, _) | (_, 2) => 2,
+            (SplineOrder::Quadratic, _) => 3,
+        };
+        let taus: Vec<f64> = self.points[self.len - used..self.len]
+            .iter()
+            .map(|p| p.0)
+            .collect();
+        let basis = |tau: f64, i: usize| -> f64 {
+            taus.iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, &tj)| (tau - tj) / (taus[i] - tj))
+                .product()
+        };
+        (0..used)
+            .map(|i| (basis(t + dt, i) - basis(t, i)).powi(2))
+            .sum()
+    }
+
     /// The displacement `v(t)·Δ + ½·a·Δ²` from frame `t` to `t + Δ`.
     pub fn displacement(&self, t: f64, dt: f64) -> Vec2 {
         self.velocity_at(t) * dt + self.a * (0.5 * dt * dt)
@@ -156,6 +189,15 @@ mod tests {
             l.push(t, Vec2::new(x, 0.0));
         }
         assert_eq!(l.velocity_at(5.0), Vec2::new(3.0, 0.0));
+        // Linear, spacing 1, Δ = 1: d = P₂ − P₁, Σc² = 2.
+        assert!((l.displacement_noise_factor(2.0, 1.0) - 2.0).abs() < 1e-12);
+        // Quadratic on uniform spacing, Δ = 1: extrapolation weights (1, −3, 3) minus the
+        // last point: (1, −3, 2), Σc² = 14.
+        let mut q = SplineDynamics::new(SplineOrder::Quadratic);
+        for t in [0.0, 1.0, 2.0] {
+            q.push(t, Vec2::zeros());
+        }
+        assert!((q.displacement_noise_factor(2.0, 1.0) - 14.0).abs() < 1e-12);
         // `updated` leaves the original alone.
         let u = l.updated(3.0, Vec2::new(9.0, 0.0));
         assert_eq!(u.velocity_at(3.0), Vec2::new(5.0, 0.0));

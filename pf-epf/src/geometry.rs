@@ -46,7 +46,7 @@ fn longest_side_sq(a: &Vec2, b: &Vec2, c: &Vec2) -> f64 {
 /// Whether `(a, b, c)` are collinear or coincident (relative tolerance [`COLLINEAR_TOL`]).
 pub fn is_degenerate(a: &Vec2, b: &Vec2, c: &Vec2) -> bool {
     let l2 = longest_side_sq(a, b, c);
-    !(l2 > 0.0) || cross3(a, b, c).abs() <= COLLINEAR_TOL * l2 || !l2.is_finite()
+    l2.is_nan() || l2 <= 0.0 || !l2.is_finite() || cross3(a, b, c).abs() <= COLLINEAR_TOL * l2
 }
 
 /// The circumscribed circle of triangle `(a, b, c)`.

@@ -1,12 +1,8 @@
 //! Bearings: wrapping to (−π, π], the measurement function (22).
 
-use std::f64::consts::PI;
-
-/// Wrap an angle to (−π, π]. Every bearing residual in the crate goes through it.
-pub fn wrap(a: f64) -> f64 {
-    let w = (a + PI).rem_euclid(2.0 * PI) - PI;
-    if w <= -PI { w + 2.0 * PI } else { w }
-}
+/// Wrap an angle to (−π, π]: pf-core's one implementation. Every bearing residual in the
+/// crate goes through it.
+pub use pf_core::geometry::wrap_angle as wrap;
 
 /// The bearing `h(x, ρ) = atan2(y − ζ, x − ξ)` of eq. (22): angle of the target position
 /// `p` seen from the observer `ρ`, counter-clockwise from the x-axis, in (−π, π]. The
@@ -18,6 +14,7 @@ pub fn bearing(p: [f64; 2], rho: [f64; 2]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     #[test]
     fn wrap_is_in_half_open_interval() {

@@ -5,6 +5,7 @@ use crate::error::{MpfError, Result};
 use crate::model::{FactoredGaussian, Measurement, MixedLinearGaussian, Model5Matrices};
 use crate::mpf::{Mpf, MpfConfig};
 use nalgebra::{SMatrix, SVector};
+use pf_core::geometry::wrap_angle;
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -13,16 +14,6 @@ use serde::{Deserialize, Serialize};
 pub type RadarState = SVector<f64, 6>;
 /// Measurement `[range, azimuth]`.
 pub type RadarObs = SVector<f64, 2>;
-
-/// Wrap an angle to `(−π, π]`.
-pub fn wrap_angle(a: f64) -> f64 {
-    let two_pi = 2.0 * std::f64::consts::PI;
-    let mut r = a.rem_euclid(two_pi);
-    if r > std::f64::consts::PI {
-        r -= two_pi;
-    }
-    r
-}
 
 /// Eq. (13b): range `√(p_x² + p_y²)` and azimuth `atan2(p_y, p_x)`, read from the first two
 /// components of `x^p` (positions are always PF states). The azimuth residual is wrapped.
@@ -321,6 +312,24 @@ pub struct RunErrors {
     pub time_s: f64,
 }
 
+/// What one run looked like step by step, for recordings: the particles' positions and
+/// the mean each particle's Kalman filter holds for the linear states.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunTrace {
+    /// Names of the states in `kf_means` (e.g. `["vx", "vy"]` for `PPKKPP`).
+    pub kf_states: Vec<String>,
+    /// Per step, `[p_x, p_y]` of every particle.
+    pub positions: Vec<Vec<[f64; 2]>>,
+    /// Per step, every particle's KF mean `x̂^k` (empty for the standard PF).
+    pub kf_means: Vec<Vec<Vec<f64>>>,
+    /// Per step, normalised weights.
+    pub weights: Vec<Vec<f64>>,
+    /// Per step, the filter's estimate of the full state `[p v a]`.
+    pub estimates: Vec<[f64; 6]>,
+}
+
+const STATE_NAMES: [&str; 6] = ["px", "py", "vx", "vy", "ax", "ay"];
+
 fn run_pk<const P: usize, const K: usize, R: Rng + ?Sized>(
     part: &Partition,
     cfg: &RadarConfig,
@@ -328,6 +337,7 @@ fn run_pk<const P: usize, const K: usize, R: Rng + ?Sized>(
     truth: &[RadarState],
     ys: &[Option<RadarObs>],
     rng: &mut R,
+    mut trace: Option<&mut RunTrace>,
 ) -> Result<RunErrors> {
     let model = part.model::<P, K>(cfg)?;
     let mut filter = Mpf::new(model, mpf_cfg)?;
@@ -335,6 +345,9 @@ fn run_pk<const P: usize, const K: usize, R: Rng + ?Sized>(
     let n = truth.len();
     let mut est = vec![[0.0; 6]; n];
     let start = std::time::Instant::now();
+    if let Some(tr) = trace.as_deref_mut() {
+        tr.kf_states = ki.iter().map(|&i| STATE_NAMES[i].to_string()).collect();
+    }
     for (t, y) in ys.iter().enumerate() {
         filter.step(y.as_ref(), rng)?;
         let (mp, mk) = filter.estimate();
@@ -343,6 +356,24 @@ fn run_pk<const P: usize, const K: usize, R: Rng + ?Sized>(
         }
         for (r, &i) in ki.iter().enumerate() {
             est[t][i] = mk[r];
+        }
+        if let Some(tr) = trace.as_deref_mut() {
+            let n = filter.n_particles();
+            tr.positions.push(
+                (0..n)
+                    .map(|j| {
+                        let x = filter.particle_p(j);
+                        [x[0], x[1]]
+                    })
+                    .collect(),
+            );
+            tr.kf_means.push(
+                (0..n)
+                    .map(|j| filter.kf_mean(j).iter().copied().collect())
+                    .collect(),
+            );
+            tr.weights.push(filter.weights().to_vec());
+            tr.estimates.push(est[t]);
         }
     }
     let time_s = start.elapsed().as_secs_f64();
@@ -370,6 +401,36 @@ pub fn run_partition<R: Rng + ?Sized>(
     ys: &[Option<RadarObs>],
     rng: &mut R,
 ) -> Result<RunErrors> {
+    dispatch(part, cfg, mpf_cfg, truth, ys, rng, None)
+}
+
+/// [`run_partition`], also recording every step's particles and KF means (for
+/// recordings; the copies make it slower, so time with [`run_partition`]).
+///
+/// # Errors
+/// As [`run_partition`].
+pub fn trace_partition<R: Rng + ?Sized>(
+    part: &Partition,
+    cfg: &RadarConfig,
+    mpf_cfg: MpfConfig,
+    truth: &[RadarState],
+    ys: &[Option<RadarObs>],
+    rng: &mut R,
+) -> Result<(RunErrors, RunTrace)> {
+    let mut trace = RunTrace::default();
+    let errors = dispatch(part, cfg, mpf_cfg, truth, ys, rng, Some(&mut trace))?;
+    Ok((errors, trace))
+}
+
+fn dispatch<R: Rng + ?Sized>(
+    part: &Partition,
+    cfg: &RadarConfig,
+    mpf_cfg: MpfConfig,
+    truth: &[RadarState],
+    ys: &[Option<RadarObs>],
+    rng: &mut R,
+    trace: Option<&mut RunTrace>,
+) -> Result<RunErrors> {
     if truth.len() != ys.len() {
         return Err(pf_core::CoreError::DimensionMismatch {
             what: "observations against true states",
@@ -380,10 +441,10 @@ pub fn run_partition<R: Rng + ?Sized>(
     }
     crate::model::check_observations(ys)?;
     match part.k() {
-        0 => run_pk::<6, 0, R>(part, cfg, mpf_cfg, truth, ys, rng),
-        1 => run_pk::<5, 1, R>(part, cfg, mpf_cfg, truth, ys, rng),
-        2 => run_pk::<4, 2, R>(part, cfg, mpf_cfg, truth, ys, rng),
-        3 => run_pk::<3, 3, R>(part, cfg, mpf_cfg, truth, ys, rng),
-        _ => run_pk::<2, 4, R>(part, cfg, mpf_cfg, truth, ys, rng),
+        0 => run_pk::<6, 0, R>(part, cfg, mpf_cfg, truth, ys, rng, trace),
+        1 => run_pk::<5, 1, R>(part, cfg, mpf_cfg, truth, ys, rng, trace),
+        2 => run_pk::<4, 2, R>(part, cfg, mpf_cfg, truth, ys, rng, trace),
+        3 => run_pk::<3, 3, R>(part, cfg, mpf_cfg, truth, ys, rng, trace),
+        _ => run_pk::<2, 4, R>(part, cfg, mpf_cfg, truth, ys, rng, trace),
     }
 }

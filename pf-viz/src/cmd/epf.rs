@@ -1,15 +1,110 @@
 //! `pf-viz epf …`: El Abed et al.: the energetic particle filter for multiple targets.
+//!
+//! - `simulate` writes a scenario's detections (with a `target` truth column, −1 for
+//!   clutter), init and truth CSVs;
+//! - `track` tracks every init target through a detections CSV (EPF or NNSF);
+//! - `energies` prints the E¹, E², E³ and E tables of one frame (the paper's Tables 1–2).
 
-use clap::Subcommand;
+use std::path::{Path, PathBuf};
 
+use clap::{Args, Subcommand};
+use pf_core::mc::stream_rng;
+use pf_epf::association::Association;
+use pf_epf::data::{Detection, Detections, Init, InitRow};
+use pf_epf::error::EpfError;
+use pf_epf::geometry::Vec2;
+use pf_epf::scenario::{Scenario, ScenarioConfig, simulate};
+use pf_epf::tracker::{Record, TrackerConfig, energies_at, track};
+use serde::Serialize;
+
+use crate::cmd::print_json;
 use crate::error::{Result, VizError};
+use crate::io::{prepare_out_dir, write_atomic};
 
 /// The subcommands of `pf-viz epf`.
 #[derive(Debug, Clone, Subcommand)]
 pub enum EpfCommand {
-    /// Not yet wired.
-    #[command(hide = true)]
-    Pending,
+    /// Simulate a scenario: DIR/detections.csv, DIR/init.csv (and DIR/truth.csv).
+    Simulate(SimulateArgs),
+    /// Track the init targets through unlabelled detections.
+    Track(TrackArgs),
+    /// The energies E¹, E², E³ and E of every target × detection at one frame.
+    Energies(EnergiesArgs),
+}
+
+/// Arguments of `pf-viz epf simulate`.
+#[derive(Debug, Clone, Args)]
+pub struct SimulateArgs {
+    /// van-plane (2 targets), walking-men (3) or ants (6, sparse frames).
+    #[arg(long, value_name = "NAME")]
+    pub scenario: Scenario,
+    /// Mean number of clutter detections per tracked frame (Poisson).
+    #[arg(long, value_name = "F", default_value_t = 0.0)]
+    pub clutter: f64,
+    /// Probability that a target's detection is missed at a tracked frame.
+    #[arg(long, value_name = "F", default_value_t = 0.0)]
+    pub miss: f64,
+    /// Random seed.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// Output directory.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Print the summary as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The tracker's settings shared by `track` and `energies`.
+#[derive(Debug, Clone, Args)]
+pub struct TrackerArgs {
+    /// Detections CSV: columns `frame`, `x`, `y` (others ignored), frames not decreasing.
+    #[arg(long, value_name = "FILE.csv")]
+    pub data: PathBuf,
+    /// Init CSV: columns `target`, `frame`, `x`, `y`; at least two frames per target.
+    #[arg(long, value_name = "FILE.csv")]
+    pub init: PathBuf,
+    /// Particles per target.
+    #[arg(long, value_name = "N", default_value_t = 500)]
+    pub particles: usize,
+    /// Random seed.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// Process noise standard deviation per √frame, q.
+    #[arg(long, value_name = "Q", default_value_t = TrackerConfig::default().q)]
+    pub q: f64,
+    /// Detection noise standard deviation, r.
+    #[arg(long, value_name = "R", default_value_t = TrackerConfig::default().r)]
+    pub r: f64,
+    /// Probability mass of the validation gates.
+    #[arg(long, value_name = "P", default_value_t = TrackerConfig::default().gate_probability)]
+    pub gate: f64,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `pf-viz epf track`.
+#[derive(Debug, Clone, Args)]
+pub struct TrackArgs {
+    /// The data and tracker settings.
+    #[command(flatten)]
+    pub tracker: TrackerArgs,
+    /// energy (EPF, optimal assignment), energy_per_measurement (eq. (1) argmin) or nn
+    /// (NNSF).
+    #[arg(long, value_name = "METHOD", default_value = "energy")]
+    pub association: Association,
+}
+
+/// Arguments of `pf-viz epf energies`.
+#[derive(Debug, Clone, Args)]
+pub struct EnergiesArgs {
+    /// The data and tracker settings.
+    #[command(flatten)]
+    pub tracker: TrackerArgs,
+    /// The frame t (a detection frame after the init frames).
+    #[arg(long, value_name = "F")]
+    pub frame: i64,
 }
 
 /// Run a `pf-viz epf` subcommand.
@@ -18,8 +113,371 @@ pub enum EpfCommand {
 /// Bad input, as a one-line message naming what and where.
 pub fn run(cmd: EpfCommand) -> Result<()> {
     match cmd {
-        EpfCommand::Pending => Err(VizError::Argument {
-            message: "pf-viz epf: not yet available".into(),
-        }),
+        EpfCommand::Simulate(a) => run_simulate(&a),
+        EpfCommand::Track(a) => run_track(&a),
+        EpfCommand::Energies(a) => run_energies(&a),
     }
+}
+
+/// A CSV's required columns, row by row, with each row's 1-based line (header = 1).
+struct CsvTable {
+    rows: Vec<Vec<String>>,
+    lines: Vec<u64>,
+}
+
+fn data_err(path: &Path, line: Option<u64>, message: impl Into<String>) -> VizError {
+    VizError::Data {
+        path: path.to_path_buf(),
+        line,
+        message: message.into(),
+    }
+}
+
+fn read_columns(path: &Path, columns: &[&str]) -> Result<CsvTable> {
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .map_err(|e| data_err(path, None, e.to_string()))?;
+    let headers = reader
+        .headers()
+        .map_err(|e| data_err(path, Some(1), e.to_string()))?
+        .clone();
+    let idx = columns
+        .iter()
+        .map(|c| {
+            headers
+                .iter()
+                .position(|h| h == *c)
+                .ok_or_else(|| data_err(path, Some(1), format!("no `{c}` column in the header")))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mut table = CsvTable {
+        rows: Vec::new(),
+        lines: Vec::new(),
+    };
+    for record in reader.records() {
+        let record =
+            record.map_err(|e| data_err(path, e.position().map(|p| p.line()), e.to_string()))?;
+        let line = record.position().map_or(0, |p| p.line());
+        table.rows.push(
+            idx.iter()
+                .map(|&i| record.get(i).unwrap_or("").to_owned())
+                .collect(),
+        );
+        table.lines.push(line);
+    }
+    Ok(table)
+}
+
+fn parse_f64(path: &Path, line: u64, col: &str, s: &str) -> Result<f64> {
+    let v: f64 = s
+        .parse()
+        .map_err(|_| data_err(path, Some(line), format!("`{col}` = `{s}` is not a number")))?;
+    if !v.is_finite() {
+        return Err(data_err(
+            path,
+            Some(line),
+            format!("`{col}` = `{s}` is not finite"),
+        ));
+    }
+    Ok(v)
+}
+
+fn parse_int(path: &Path, line: u64, col: &str, s: &str) -> Result<i64> {
+    if let Ok(v) = s.parse::<i64>() {
+        return Ok(v);
+    }
+    let v = parse_f64(path, line, col, s)?;
+    if v.fract() != 0.0 || v.abs() > 9.0e15 {
+        return Err(data_err(
+            path,
+            Some(line),
+            format!("`{col}` = `{s}` is not an integer"),
+        ));
+    }
+    Ok(v as i64)
+}
+
+/// An error of the library's validation, mapped to the file and line at fault.
+fn epf_data_err(path: &Path, lines: &[u64], e: EpfError) -> VizError {
+    let line = match &e {
+        EpfError::FrameBackwards { row, .. } | EpfError::NonFiniteData { row, .. } => {
+            lines.get(*row).copied()
+        }
+        _ => None,
+    };
+    data_err(path, line, e.to_string())
+}
+
+fn read_detections(path: &Path) -> Result<Detections> {
+    let t = read_columns(path, &["frame", "x", "y"])?;
+    let mut rows = Vec::with_capacity(t.rows.len());
+    for (r, &line) in t.rows.iter().zip(&t.lines) {
+        rows.push(Detection {
+            frame: parse_int(path, line, "frame", &r[0])?,
+            position: Vec2::new(
+                parse_f64(path, line, "x", &r[1])?,
+                parse_f64(path, line, "y", &r[2])?,
+            ),
+            target: None,
+        });
+    }
+    Detections::new(rows).map_err(|e| epf_data_err(path, &t.lines, e))
+}
+
+fn read_init(path: &Path) -> Result<Init> {
+    let t = read_columns(path, &["target", "frame", "x", "y"])?;
+    let mut rows = Vec::with_capacity(t.rows.len());
+    for (r, &line) in t.rows.iter().zip(&t.lines) {
+        rows.push(InitRow {
+            target: parse_int(path, line, "target", &r[0])?,
+            frame: parse_int(path, line, "frame", &r[1])?,
+            position: Vec2::new(
+                parse_f64(path, line, "x", &r[2])?,
+                parse_f64(path, line, "y", &r[3])?,
+            ),
+        });
+    }
+    Init::new(&rows).map_err(|e| epf_data_err(path, &t.lines, e))
+}
+
+impl TrackerArgs {
+    fn config(&self, association: Association) -> TrackerConfig {
+        TrackerConfig {
+            association,
+            n_particles: self.particles,
+            q: self.q,
+            r: self.r,
+            gate_probability: self.gate,
+            ..TrackerConfig::default()
+        }
+    }
+}
+
+fn write_csv(path: &Path, header: &str, lines: impl Iterator<Item = String>) -> Result<()> {
+    write_atomic(path, |w| {
+        let io = VizError::io(path);
+        writeln!(w, "{header}").map_err(io)?;
+        for l in lines {
+            writeln!(w, "{l}").map_err(VizError::io(path))?;
+        }
+        Ok(())
+    })
+}
+
+#[derive(Serialize)]
+struct SimulateSummary {
+    scenario: &'static str,
+    seed: u64,
+    clutter: f64,
+    miss: f64,
+    frames: Vec<i64>,
+    targets: usize,
+    detections: usize,
+    files: Vec<String>,
+}
+
+fn run_simulate(a: &SimulateArgs) -> Result<()> {
+    let cfg = ScenarioConfig {
+        scenario: a.scenario,
+        clutter: a.clutter,
+        miss: a.miss,
+    };
+    cfg.validate().map_err(|e| VizError::Argument {
+        message: e.to_string(),
+    })?;
+    let sim = simulate(&cfg, &mut stream_rng(a.seed, 0)).map_err(VizError::paper("epf"))?;
+    prepare_out_dir(&a.out)?;
+    let det = a.out.join("detections.csv");
+    let init = a.out.join("init.csv");
+    let truth = a.out.join("truth.csv");
+    write_csv(
+        &det,
+        "frame,x,y,target",
+        sim.detections.rows().iter().map(|d| {
+            format!(
+                "{},{},{},{}",
+                d.frame,
+                d.position.x,
+                d.position.y,
+                d.target.unwrap_or(-1)
+            )
+        }),
+    )?;
+    write_csv(
+        &init,
+        "target,frame,x,y",
+        sim.init.targets().iter().flat_map(|t| {
+            t.points
+                .iter()
+                .map(move |(f, p)| format!("{},{f},{},{}", t.id, p.x, p.y))
+        }),
+    )?;
+    write_csv(
+        &truth,
+        "target,frame,x,y",
+        sim.truth.iter().flat_map(|t| {
+            sim.frames
+                .iter()
+                .zip(&t.position)
+                .map(move |(f, p)| format!("{},{f},{},{}", t.target, p[0], p[1]))
+        }),
+    )?;
+    let summary = SimulateSummary {
+        scenario: a.scenario.name(),
+        seed: a.seed,
+        clutter: a.clutter,
+        miss: a.miss,
+        frames: sim.frames.clone(),
+        targets: sim.truth.len(),
+        detections: sim.detections.rows().len(),
+        files: [&det, &init, &truth]
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect(),
+    };
+    if a.json {
+        print_json(&summary)
+    } else {
+        println!(
+            "{}: {} targets, {} detections over frames {:?}\nwrote {}",
+            summary.scenario,
+            summary.targets,
+            summary.detections,
+            summary.frames,
+            summary.files.join(", ")
+        );
+        Ok(())
+    }
+}
+
+fn run_track(a: &TrackArgs) -> Result<()> {
+    let detections = read_detections(&a.tracker.data)?;
+    let init = read_init(&a.tracker.init)?;
+    let cfg = a.tracker.config(a.association);
+    cfg.validate().map_err(|e| VizError::Argument {
+        message: e.to_string(),
+    })?;
+    let result = track(
+        &detections,
+        &init,
+        &cfg,
+        Record::Tracks,
+        &mut stream_rng(a.tracker.seed, 0),
+    )
+    .map_err(VizError::paper("epf"))?;
+    if a.tracker.json {
+        return print_json(&result);
+    }
+    println!(
+        "{} ({}): {} targets over {} frames ({}..={})",
+        a.association.name(),
+        cfg.n_particles,
+        result.tracks.len(),
+        result.frames.len(),
+        result.frames[0],
+        result.frames[result.frames.len() - 1]
+    );
+    for t in &result.tracks {
+        let hits = t.detection.iter().filter(|d| d.is_some()).count();
+        let last = t.position[t.position.len() - 1];
+        println!(
+            "  target {}: {hits}/{} frames associated, last position ({:.3}, {:.3})",
+            t.target,
+            t.detection.len(),
+            last[0],
+            last[1]
+        );
+    }
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct EnergiesJson {
+    frame: i64,
+    targets: Vec<i64>,
+    detections: Vec<usize>,
+    positions: Vec<[f64; 2]>,
+    #[serde(rename = "E1")]
+    e1: Vec<Vec<f64>>,
+    #[serde(rename = "E2")]
+    e2: Vec<Vec<f64>>,
+    #[serde(rename = "E3")]
+    e3: Vec<Vec<f64>>,
+    #[serde(rename = "E")]
+    e: Vec<Vec<f64>>,
+    #[serde(rename = "E1_raw")]
+    e1_raw: Vec<Vec<f64>>,
+    #[serde(rename = "E2_raw")]
+    e2_raw: Vec<Vec<f64>>,
+    #[serde(rename = "E3_raw")]
+    e3_raw: Vec<Vec<f64>>,
+    gated: Vec<Vec<bool>>,
+    assignment: Vec<Option<usize>>,
+}
+
+fn run_energies(a: &EnergiesArgs) -> Result<()> {
+    let detections = read_detections(&a.tracker.data)?;
+    let init = read_init(&a.tracker.init)?;
+    let cfg = a.tracker.config(Association::Energy);
+    cfg.validate().map_err(|e| VizError::Argument {
+        message: e.to_string(),
+    })?;
+    let t = energies_at(
+        &detections,
+        &init,
+        &cfg,
+        a.frame,
+        &mut stream_rng(a.tracker.seed, 0),
+    )
+    .map_err(|e| match e {
+        EpfError::UnknownFrame { .. } => VizError::Argument {
+            message: format!("--frame: {e}"),
+        },
+        e => VizError::paper("epf")(e),
+    })?;
+    let [w1, w2, w3] = t.weighted;
+    let [r1, r2, r3] = t.raw;
+    let out = EnergiesJson {
+        frame: t.frame,
+        targets: t.targets,
+        detections: t.detections,
+        positions: t.positions,
+        e1: w1,
+        e2: w2,
+        e3: w3,
+        e: t.e,
+        e1_raw: r1,
+        e2_raw: r2,
+        e3_raw: r3,
+        gated: t.gated,
+        assignment: t.assignment,
+    };
+    if a.tracker.json {
+        return print_json(&out);
+    }
+    println!(
+        "frame {}: α_l·E^l and E(k, y_j) (rows: targets, columns: detection rows {:?})",
+        out.frame, out.detections
+    );
+    for (k, id) in out.targets.iter().enumerate() {
+        let cells: Vec<String> = (0..out.detections.len())
+            .map(|j| {
+                format!(
+                    "{:.3} {:.3} {:.3} | {:.3}{}",
+                    out.e1[k][j],
+                    out.e2[k][j],
+                    out.e3[k][j],
+                    out.e[k][j],
+                    if out.gated[k][j] {
+                        ""
+                    } else {
+                        " (out of gate)"
+                    }
+                )
+            })
+            .collect();
+        println!("  T{id}: {}", cells.join("   "));
+    }
+    Ok(())
 }

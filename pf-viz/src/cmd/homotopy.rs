@@ -1,25 +1,131 @@
-//! `pf-viz homotopy …`: Morelande et al.: the optimal homotopy filter for bearings-only tracking.
+//! `pf-viz homotopy …`: Morelande et al., the optimal homotopy filter for bearings-only
+//! tracking.
+//!
+//! | subcommand | prints |
+//! |---|---|
+//! | `rmse` | `{"time", "rmse": {"OHF", "AOHF", "UKF-LPC", "PF"}, "seconds_per_run": {…}}` (Fig. 3) |
+//! | `ellipses` | `{"truth": [x, y], "lambda", "ellipses": [{"center", "semi_axes", "angle"}]}` (Fig. 2) |
 
-use clap::Subcommand;
+use clap::{Args, Subcommand, ValueEnum};
+use pf_homotopy::experiments::{EllipsesConfig, RmseConfig, Scale, ellipses, rmse};
 
+use super::print_json;
 use crate::error::{Result, VizError};
 
 /// The subcommands of `pf-viz homotopy`.
 #[derive(Debug, Clone, Subcommand)]
 pub enum HomotopyCommand {
-    /// Not yet wired.
-    #[command(hide = true)]
-    Pending,
+    /// RMS position error against time for UKF-LPC, PF, OHF and AOHF (Fig. 3), and the cost.
+    Rmse(RmseArgs),
+    /// Error ellipses of the OHF parameterisation over λ at one sample (Fig. 2).
+    Ellipses(EllipsesArgs),
+}
+
+/// Size presets of `rmse`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum RmseScale {
+    /// 8 realisations, a 2 000-particle PF.
+    Quick,
+    /// 40 realisations, a 10 000-particle PF.
+    Default,
+    /// The paper's: 500 realisations, a 100 000-particle PF.
+    Full,
+}
+
+/// Arguments of `pf-viz homotopy rmse`.
+#[derive(Debug, Clone, Args)]
+pub struct RmseArgs {
+    /// Monte Carlo realisations (default: the scale's).
+    #[arg(long, value_name = "R")]
+    pub realisations: Option<usize>,
+    /// Particles of the PF (default: the scale's).
+    #[arg(long, value_name = "N")]
+    pub particles: Option<usize>,
+    /// Seed: realisation r uses stream (S, r).
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// Size preset for what the flags leave unset.
+    #[arg(long, value_enum, default_value_t = RmseScale::Default)]
+    pub scale: RmseScale,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `pf-viz homotopy ellipses`.
+#[derive(Debug, Clone, Args)]
+pub struct EllipsesArgs {
+    /// The sampling instant K (the paper's is 17).
+    #[arg(long, value_name = "K", default_value_t = 17)]
+    pub step: usize,
+    /// Seed of the realisation.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Run a `pf-viz homotopy` subcommand.
 ///
 /// # Errors
-/// Bad input, as a one-line message naming what and where.
+/// Bad arguments, as a one-line message.
 pub fn run(cmd: HomotopyCommand) -> Result<()> {
+    let homotopy = VizError::paper("homotopy");
     match cmd {
-        HomotopyCommand::Pending => Err(VizError::Argument {
-            message: "pf-viz homotopy: not yet available".into(),
-        }),
+        HomotopyCommand::Rmse(a) => {
+            let mut cfg = RmseConfig::at_scale(match a.scale {
+                RmseScale::Quick => Scale::Quick,
+                RmseScale::Default => Scale::Default,
+                RmseScale::Full => Scale::Full,
+            });
+            cfg.seed = a.seed;
+            if let Some(r) = a.realisations {
+                cfg.realisations = r;
+            }
+            if let Some(n) = a.particles {
+                cfg.filters.particles = n;
+            }
+            let r = rmse(&cfg).map_err(homotopy)?;
+            if a.json {
+                return print_json(&r);
+            }
+            let last = r.time.len() - 1;
+            println!(
+                "RMS position error at t = {} s over {} realisations (PF: N = {}):",
+                r.time[last], cfg.realisations, cfg.filters.particles
+            );
+            for (name, e, s) in [
+                ("UKF-LPC", &r.rmse.ukf_lpc, r.seconds_per_run.ukf_lpc),
+                ("PF", &r.rmse.pf, r.seconds_per_run.pf),
+                ("OHF", &r.rmse.ohf, r.seconds_per_run.ohf),
+                ("AOHF", &r.rmse.aohf, r.seconds_per_run.aohf),
+            ] {
+                println!("  {name:8} {:8.0} m   {:.4} s per run", e[last], s);
+            }
+            Ok(())
+        }
+        HomotopyCommand::Ellipses(a) => {
+            let cfg = EllipsesConfig {
+                step: a.step,
+                seed: a.seed,
+                ..EllipsesConfig::default()
+            };
+            let r = ellipses(&cfg).map_err(homotopy)?;
+            if a.json {
+                return print_json(&r);
+            }
+            println!(
+                "OHF at sample {}: truth ({:.0}, {:.0}) m",
+                a.step, r.truth[0], r.truth[1]
+            );
+            for (l, e) in r.lambda.iter().zip(&r.ellipses) {
+                println!(
+                    "  λ = {l:.2}: centre ({:.0}, {:.0}) m, semi-axes {:.0} × {:.0} m",
+                    e.center[0], e.center[1], e.semi_axes[0], e.semi_axes[1]
+                );
+            }
+            Ok(())
+        }
     }
 }

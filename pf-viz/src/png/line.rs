@@ -7,9 +7,12 @@ use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::style::{self, Dash, LegendPos, Marker, plot_err};
+use super::style::{self, AxisFonts, Dash, LegendPos, Marker, plot_err};
 use super::{Canvas, render_png};
 use crate::error::{Result, VizError};
+
+/// Series with more points than this are drawn without markers.
+const MAX_MARKED_POINTS: usize = 60;
 
 /// A shaded band `lower[j] ≤ y ≤ upper[j]` at the series' x values.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -155,19 +158,13 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
         .y_label_area_size(style::Y_LABEL_AREA_PX)
         .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)
         .map_err(&err)?;
-    chart
-        .configure_mesh()
-        .x_desc(&plot.x_label)
-        .y_desc(&plot.y_label)
-        .axis_desc_style(style::text(style::LABEL_PX))
-        .label_style(style::text(style::TICK_PX))
-        .x_label_formatter(&|x| style::tick_label(*x))
-        .y_label_formatter(&|y| style::tick_label(*y))
-        .bold_line_style(style::GRID.stroke_width(1))
-        .light_line_style(WHITE.stroke_width(0))
-        .axis_style(style::INK.stroke_width(1))
-        .draw()
-        .map_err(&err)?;
+    style::draw_mesh(
+        &mut chart,
+        path,
+        &plot.x_label,
+        &plot.y_label,
+        AxisFonts::FULL,
+    )?;
 
     // Bands first, so every line stays visible on top of every band.
     for (j, s) in plot.series.iter().enumerate() {
@@ -192,7 +189,13 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
         let look = style::SERIES[j % style::SERIES.len()];
         let stroke = look.stroke();
         let points: Vec<(f64, f64)> = s.x.iter().copied().zip(s.y.iter().copied()).collect();
-        let anno = match look.dash {
+        let dense = points.len() > MAX_MARKED_POINTS;
+        // A marked solid series that is too dense for markers is dotted instead.
+        let dash = match (dense, look.marker, look.dash) {
+            (true, Marker::Circle | Marker::Cross, Dash::Solid) => Dash::Dashed { on: 3, off: 4 },
+            (_, _, d) => d,
+        };
+        let anno = match dash {
             Dash::Solid => chart.draw_series(LineSeries::new(points.clone(), stroke)),
             Dash::Dashed { on, off } => {
                 chart.draw_series(DashedLineSeries::new(points.clone(), on, off, stroke))
@@ -207,7 +210,10 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
         // the in-memory backend, so dashes and markers appear on the series, not the key.
         anno.label(name)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 30, y)], stroke));
-        match look.marker {
+        // Markers on a dense series would merge into a thick line: beyond this many
+        // points the dash pattern alone tells the series apart.
+        let marker = if dense { Marker::None } else { look.marker };
+        match marker {
             Marker::None => {}
             Marker::Circle => {
                 chart
@@ -240,17 +246,7 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
             .legend(move |(x, y)| DashedPathElement::new(vec![(x, y), (x + 30, y)], 3, 4, look));
     }
 
-    chart
-        .configure_series_labels()
-        .position(plot.legend.to_plotters())
-        .margin(12)
-        .legend_area_size(40)
-        .label_font(style::text(style::LEGEND_PX))
-        .background_style(WHITE.mix(0.88))
-        .border_style(style::MID_GREY)
-        .draw()
-        .map_err(&err)?;
-    Ok(())
+    style::draw_legend(&mut chart, path, plot.legend, AxisFonts::FULL)
 }
 
 #[cfg(test)]

@@ -217,6 +217,86 @@ pub fn tick_label(v: f64) -> String {
     s.trim_end_matches('0').trim_end_matches('.').to_owned()
 }
 
+/// A chart on f64 axes, as every plot kind draws.
+pub type Chart<'a, 'b> = plotters::chart::ChartContext<
+    'a,
+    plotters::prelude::BitMapBackend<'b>,
+    plotters::coord::cartesian::Cartesian2d<
+        plotters::coord::types::RangedCoordf64,
+        plotters::coord::types::RangedCoordf64,
+    >,
+>;
+
+/// Text sizes of the axes and legend: [`AxisFonts::FULL`] for a figure, smaller for a panel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AxisFonts {
+    /// Axis descriptions, px.
+    pub label: u32,
+    /// Tick labels, px.
+    pub tick: u32,
+    /// Legend entries, px.
+    pub legend: u32,
+}
+
+impl AxisFonts {
+    /// The sizes of a full figure.
+    pub const FULL: AxisFonts = AxisFonts {
+        label: LABEL_PX,
+        tick: TICK_PX,
+        legend: LEGEND_PX,
+    };
+}
+
+/// Draw the shared mesh: light grid, ink axes, short tick labels, axis descriptions.
+///
+/// # Errors
+/// A plot error naming `path`.
+pub fn draw_mesh(
+    chart: &mut Chart<'_, '_>,
+    path: &std::path::Path,
+    x_label: &str,
+    y_label: &str,
+    fonts: AxisFonts,
+) -> Result<()> {
+    use plotters::style::Color;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .axis_desc_style(text(fonts.label))
+        .label_style(text(fonts.tick))
+        .x_label_formatter(&|x| tick_label(*x))
+        .y_label_formatter(&|y| tick_label(*y))
+        .bold_line_style(GRID.stroke_width(1))
+        .light_line_style(plotters::style::WHITE.stroke_width(0))
+        .axis_style(INK.stroke_width(1))
+        .draw()
+        .map_err(plot_err(path))
+}
+
+/// Draw the legend of the labelled series, in the shared frame.
+///
+/// # Errors
+/// A plot error naming `path`.
+pub fn draw_legend<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    path: &std::path::Path,
+    position: LegendPos,
+    fonts: AxisFonts,
+) -> Result<()> {
+    use plotters::style::Color;
+    chart
+        .configure_series_labels()
+        .position(position.to_plotters())
+        .margin(12)
+        .legend_area_size(40)
+        .label_font(text(fonts.legend))
+        .background_style(plotters::style::WHITE.mix(0.88))
+        .border_style(MID_GREY)
+        .draw()
+        .map_err(plot_err(path))
+}
+
 /// Map a plotters drawing error to [`VizError::Plot`] for the figure at `path`.
 pub fn plot_err<E: std::fmt::Display>(path: &std::path::Path) -> impl Fn(E) -> VizError + '_ {
     move |e| VizError::Plot {

@@ -14,7 +14,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::render_png;
-use super::style::{self, Dash, LegendPos, Marker, plot_err};
+use super::style::{self, AxisFonts, Dash, LegendPos, Marker, plot_err};
 use crate::error::{Result, VizError};
 
 /// Points on each ellipse outline.
@@ -252,19 +252,12 @@ fn draw(
         .y_label_area_size(f.y_area)
         .build_cartesian_2d(x_lo..x_hi, y_lo..y_hi)
         .map_err(&err)?;
-    chart
-        .configure_mesh()
-        .x_desc(&plot.x_label)
-        .y_desc(&plot.y_label)
-        .axis_desc_style(style::text(f.label))
-        .label_style(style::text(f.tick))
-        .x_label_formatter(&|x| style::tick_label(*x))
-        .y_label_formatter(&|y| style::tick_label(*y))
-        .bold_line_style(style::GRID.stroke_width(1))
-        .light_line_style(WHITE.stroke_width(0))
-        .axis_style(style::INK.stroke_width(1))
-        .draw()
-        .map_err(&err)?;
+    let axis_fonts = AxisFonts {
+        label: f.label,
+        tick: f.tick,
+        legend: f.legend,
+    };
+    style::draw_mesh(&mut chart, path, &plot.x_label, &plot.y_label, axis_fonts)?;
 
     let mut any_legend = false;
     for layer in &plot.layers {
@@ -368,16 +361,7 @@ fn draw(
             });
     }
     if any_legend {
-        chart
-            .configure_series_labels()
-            .position(plot.legend.to_plotters())
-            .margin(10)
-            .legend_area_size(40)
-            .label_font(style::text(f.legend))
-            .background_style(WHITE.mix(0.88))
-            .border_style(style::MID_GREY)
-            .draw()
-            .map_err(&err)?;
+        style::draw_legend(&mut chart, path, plot.legend, axis_fonts)?;
     }
     Ok(())
 }

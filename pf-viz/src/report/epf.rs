@@ -1,7 +1,33 @@
 //! Report section for El Abed et al.: the energetic particle filter for multiple targets.
+//!
+//! The paper's videos are not available, so each of its three tests is simulated
+//! ([`pf_epf::scenario`]): van–plane (Fig. 2), walking men (Fig. 3, Table 1) and ants
+//! (Fig. 4, Table 2). Per scenario:
+//! - `epf-<scenario>-frames.png`: frames t−2, t−1, t, t+1 of one run (the paper's figure
+//!   layout) with detections, EPF and NNSF tracks, EPF's validation gates and associations;
+//! - `epf-<scenario>-rec.png`: REC curves per target, EPF against NNSF (Fig. 4c), pooled
+//!   over the replications;
+//! - the energy table at frame t (the style of Tables 1–2) and the error-rate, RMSE and
+//!   OSPA table over replications of the clean scenario and its clutter/miss variants.
+//!
+//! Randomness: comparison `v` of scenario `s` runs under seed `seed + 1000·s + 100·v`
+//! ([`pf_epf::experiments::compare`] derives its streams from it); the example run of
+//! scenario `s` simulates with stream `(seed, 50 + s)` and tracks with `(seed, 60 + s)`.
 
-use super::{Context, Section, SectionReport};
-use crate::error::Result;
+use pf_core::mc::{Par, stream_rng};
+use pf_core::metrics::{RecCurve, tolerance_grid};
+use pf_epf::experiments::{Comparison, ComparisonConfig, Method, compare, tracker_for};
+use pf_epf::metrics::rec_of;
+use pf_epf::scenario::{Scenario, ScenarioConfig, Simulation, TruthTrack, simulate};
+use pf_epf::tracker::{EnergyTable, Record, TrackResult, TrackerConfig, energies_at, track};
+use serde::{Deserialize, Serialize};
+
+use super::{Context, Figure, Section, SectionReport, Table, to_json};
+use crate::cli::Scale;
+use crate::error::{Result, VizError};
+use crate::png::rec::{RecPanel, RecPlot, RecSeries};
+use crate::png::style::LegendPos;
+use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle, render_grid};
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
@@ -10,6 +36,813 @@ pub const SECTION: Section = Section {
     run: run_section,
 };
 
-fn run_section(_ctx: &Context<'_>) -> Result<SectionReport> {
-    Ok(SectionReport::default())
+const PAPER: &str = "epf";
+
+/// The section's sizes. The paper states none of them (it shows one run per sequence).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EpfReportConfig {
+    /// Replications per scenario variant.
+    pub replications: usize,
+    /// Particles per target `N`.
+    pub n_particles: usize,
+    /// `(clutter per frame, miss probability)` of each variant; the first is the clean one.
+    pub variants: Vec<(f64, f64)>,
+    /// Points of the REC tolerance grid.
+    pub rec_points: usize,
+}
+
+impl EpfReportConfig {
+    /// The sizes for `scale`.
+    pub fn for_scale(scale: Scale) -> Self {
+        let (replications, n_particles) = match scale {
+            Scale::Quick => (6, 100),
+            Scale::Default => (1000, 300),
+            Scale::Full => (5000, 500),
+        };
+        EpfReportConfig {
+            replications,
+            n_particles,
+            variants: vec![(0.0, 0.0), (1.0, 0.1), (3.0, 0.2)],
+            rec_points: 201,
+        }
+    }
+}
+
+/// One method's REC curve for one target.
+#[derive(Debug, Clone, Serialize)]
+pub struct TargetRec {
+    /// The method.
+    pub method: Method,
+    /// Target id.
+    pub target: usize,
+    /// The curve.
+    pub curve: RecCurve,
+}
+
+/// Everything behind one scenario's figures and tables.
+#[derive(Debug, Clone, Serialize)]
+pub struct ScenarioResult {
+    /// The scenario.
+    pub scenario: Scenario,
+    /// The ablation of eq. (1) on the clean scenario (EPF with components left out).
+    pub ablation: Comparison,
+    /// The comparison per variant: means and standard errors, per-run error rates (the
+    /// pooled errors, per-run RMSE, OSPA and key-frame flags are dropped once used).
+    pub comparisons: Vec<Comparison>,
+    /// REC curves of the clean variant, per method and target.
+    pub rec: Vec<TargetRec>,
+    /// The example run's energies at the key frame.
+    pub energies: EnergyTable,
+    /// The example run's EPF and NNSF tracks.
+    pub example: Vec<(Method, TrackResult)>,
+    /// The example run's observed frames.
+    pub frames: Vec<i64>,
+    /// The example run's true paths.
+    pub truth: Vec<TruthTrack>,
+    /// The example run's detections, in file order.
+    pub detections: Vec<DetectionRow>,
+}
+
+/// One detection of the example run.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct DetectionRow {
+    /// Frame.
+    pub frame: i64,
+    /// Position.
+    pub position: [f64; 2],
+    /// True source (−1: clutter).
+    pub target: i64,
+}
+
+/// The section's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct EpfReportResult {
+    /// Sizes.
+    pub config: EpfReportConfig,
+    /// Master seed.
+    pub seed: u64,
+    /// Per scenario.
+    pub scenarios: Vec<ScenarioResult>,
+}
+
+/// The paper's energy magnitudes `E(T_i, M_j)`, rows `T_i`, columns `M_j` (M_j being T_j's
+/// detection): van–plane from the equations of Section 4, walking men from Table 1, ants
+/// from Table 2 (printed there ×100).
+fn paper_e(s: Scenario) -> Vec<Vec<f64>> {
+    match s {
+        Scenario::VanPlane => vec![vec![0.27, 0.68], vec![0.79, 0.43]],
+        Scenario::WalkingMen => vec![
+            vec![0.085, 0.51, 0.363],
+            vec![0.53, 0.32, 0.455],
+            vec![0.47, 0.37, 0.16],
+        ],
+        Scenario::Ants => [
+            [3.9, 38.1, 14.9, 26.7, 40.1, 36.7],
+            [13.7, 3.4, 18.9, 6.7, 32.6, 10.5],
+            [17.5, 15.2, 2.6, 10.8, 14.0, 18.1],
+            [25.9, 8.7, 20.4, 5.4, 17.6, 9.5],
+            [44.4, 50.1, 54.7, 56.1, 7.1, 53.6],
+            [16.6, 13.9, 19.4, 44.5, 8.7, 3.2],
+        ]
+        .iter()
+        .map(|r| r.iter().map(|v| v / 100.0).collect())
+        .collect(),
+    }
+}
+
+fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
+    let cfg = EpfReportConfig::for_scale(ctx.scale);
+    let mut report = SectionReport::default();
+    let mut scenarios = Vec::new();
+    for (si, &s) in Scenario::ALL.iter().enumerate() {
+        let r = run_scenario(ctx, &cfg, si, s, &mut report)?;
+        scenarios.push(r);
+    }
+    notes(&scenarios, &mut report);
+    let mut result = EpfReportResult {
+        config: cfg,
+        seed: ctx.seed,
+        scenarios,
+    };
+    if ctx.write_rrd() {
+        #[cfg(feature = "rrd")]
+        {
+            crate::rrd::epf::save(&ctx.path("epf.rrd"), &result)?;
+            report.files.push("epf.rrd".into());
+        }
+    }
+    // The particle clouds are for the recording only.
+    for s in &mut result.scenarios {
+        for (_, r) in &mut s.example {
+            for f in &mut r.records {
+                for t in &mut f.targets {
+                    t.particles.clear();
+                }
+            }
+        }
+    }
+    report.result = to_json(ctx, &result)?;
+    Ok(report)
+}
+
+fn run_scenario(
+    ctx: &Context<'_>,
+    cfg: &EpfReportConfig,
+    si: usize,
+    s: Scenario,
+    report: &mut SectionReport,
+) -> Result<ScenarioResult> {
+    let paper = VizError::paper(PAPER);
+    let mut tracker = tracker_for(s);
+    tracker.n_particles = cfg.n_particles;
+    // The comparisons.
+    let bar = ctx.progress.bar(
+        &format!("epf {}", s.name()),
+        (cfg.replications * (cfg.variants.len() + 1)) as u64,
+    );
+    let mut comparisons = Vec::new();
+    for (vi, &(clutter, miss)) in cfg.variants.iter().enumerate() {
+        let cc = ComparisonConfig {
+            tracker,
+            ..ComparisonConfig::new(
+                ScenarioConfig {
+                    scenario: s,
+                    clutter,
+                    miss,
+                },
+                cfg.replications,
+            )
+        };
+        let seed = ctx
+            .seed
+            .wrapping_add(1000 * si as u64)
+            .wrapping_add(100 * vi as u64);
+        comparisons.push(compare(&cc, seed, Par::Rayon, &|| bar.inc(1)).map_err(paper)?);
+    }
+    // The ablation of eq. (1) on the clean scenario.
+    let ablation = compare(
+        &ComparisonConfig {
+            tracker,
+            methods: Method::ABLATIONS.to_vec(),
+            ..ComparisonConfig::new(ScenarioConfig::new(s), cfg.replications)
+        },
+        ctx.seed.wrapping_add(1000 * si as u64).wrapping_add(900),
+        Par::Rayon,
+        &|| bar.inc(1),
+    )
+    .map_err(paper)?;
+    bar.finish_and_clear();
+
+    // REC curves of the clean variant: EPF and NNSF per target.
+    let clean = &comparisons[0];
+    let shown = [Method::Epf, Method::Nnsf];
+    let max_err = clean
+        .methods
+        .iter()
+        .filter(|m| shown.contains(&m.method))
+        .flat_map(|m| m.errors_per_target.iter().flatten().copied())
+        .fold(0.0, f64::max);
+    let mut grid = tolerance_grid(max_err.max(1e-9), cfg.rec_points);
+    // `max·(m−1)/(m−1)` can round one ulp below the largest error; end exactly on it so
+    // every curve reaches 1.
+    if let Some(last) = grid.last_mut() {
+        *last = max_err.max(1e-9);
+    }
+    let mut rec = Vec::new();
+    for m in clean.methods.iter().filter(|m| shown.contains(&m.method)) {
+        for (k, errs) in m.errors_per_target.iter().enumerate() {
+            rec.push(TargetRec {
+                method: m.method,
+                target: k,
+                curve: rec_of(errs, &grid).map_err(paper)?,
+            });
+        }
+    }
+    let n_targets = clean.methods[0].errors_per_target.len();
+    let rec_plot = RecPlot {
+        title: format!(
+            "{}: REC curves per target, EPF against NNSF ({} runs)",
+            title(s),
+            cfg.replications
+        ),
+        x_label: "error tolerance ‖X̂ − X‖ (scene units)".into(),
+        panels: (0..n_targets)
+            .map(|k| RecPanel {
+                title: format!("T{}", k + 1),
+                curves: shown
+                    .iter()
+                    .filter_map(|&m| rec.iter().find(|r| r.method == m && r.target == k))
+                    .map(|r| RecSeries {
+                        name: r.method.label().into(),
+                        tolerance: r.curve.tolerance.clone(),
+                        accuracy: r.curve.accuracy.clone(),
+                    })
+                    .collect(),
+            })
+            .collect(),
+        cols: if n_targets > 3 { 3 } else { n_targets },
+        legend: LegendPos::LowerRight,
+    };
+    let rec_file = format!("epf-{}-rec.png", s.name());
+    crate::png::rec::render(&ctx.path(&rec_file), &rec_plot)?;
+
+    // The example run.
+    let sim = simulate(
+        &ScenarioConfig::new(s),
+        &mut stream_rng(ctx.seed, 50 + si as u64),
+    )
+    .map_err(paper)?;
+    let mut example = Vec::new();
+    for m in shown {
+        let res = track(
+            &sim.detections,
+            &sim.init,
+            &m.configure(&tracker),
+            Record::Particles,
+            &mut stream_rng(ctx.seed, 60 + si as u64),
+        )
+        .map_err(paper)?;
+        example.push((m, res));
+    }
+    let energies = energies_at(
+        &sim.detections,
+        &sim.init,
+        &Method::Epf.configure(&tracker),
+        s.key_frame(),
+        &mut stream_rng(ctx.seed, 60 + si as u64),
+    )
+    .map_err(paper)?;
+    // The pooled errors are behind the REC curves, which are kept, and the tables show
+    // means and standard errors; dropping the raw per-run vectors (all but the error
+    // rates) keeps summary.json to a few MB at the default scale.
+    let mut ablation = ablation;
+    for c in comparisons.iter_mut().chain(std::iter::once(&mut ablation)) {
+        for m in &mut c.methods {
+            m.errors_per_target.clear();
+            m.rmse.clear();
+            m.ospa.clear();
+            m.key_frame_right.clear();
+        }
+    }
+    let frames_file = format!("epf-{}-frames.png", s.name());
+    frames_figure(ctx, s, &sim, &example, &frames_file)?;
+
+    report.figures.push(Figure {
+        file: frames_file,
+        caption: format!(
+            "{}: frames {} of one simulated run (cf. the paper's Fig. {}). Dots: detections \
+             of the frame (unlabelled); grey: true paths; solid: EPF tracks with their \
+             validation gates (P_G = {}) and association lines; dashed with crosses: NNSF \
+             tracks.",
+            title(s),
+            panel_frames(s)
+                .iter()
+                .map(|f| f.to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            fig_no(s),
+            tracker.gate_probability
+        ),
+    });
+    report.figures.push(Figure {
+        file: rec_file,
+        caption: format!(
+            "{}: REC curves per target (fraction of tracked frames whose position error is \
+             within the tolerance), EPF against NNSF, pooled over {} runs of the clean \
+             scenario. The paper's Fig. 4c shows the same kind of curve for its ants (EPF \
+             only, one run).",
+            title(s),
+            cfg.replications
+        ),
+    });
+    report.tables.push(energy_table(s, &sim, &energies));
+    report.tables.push(error_table(s, &comparisons));
+    report.tables.push(ablation_table(s, &ablation));
+    Ok(ScenarioResult {
+        scenario: s,
+        ablation,
+        comparisons,
+        rec,
+        energies,
+        example,
+        frames: sim.frames.clone(),
+        truth: sim.truth.clone(),
+        detections: sim
+            .detections
+            .rows()
+            .iter()
+            .map(|d| DetectionRow {
+                frame: d.frame,
+                position: [d.position.x, d.position.y],
+                target: d.target.unwrap_or(-1),
+            })
+            .collect(),
+    })
+}
+
+fn title(s: Scenario) -> &'static str {
+    match s {
+        Scenario::VanPlane => "Van–plane",
+        Scenario::WalkingMen => "Walking men",
+        Scenario::Ants => "Ants",
+    }
+}
+
+fn fig_no(s: Scenario) -> u8 {
+    match s {
+        Scenario::VanPlane => 2,
+        Scenario::WalkingMen => 3,
+        Scenario::Ants => 4,
+    }
+}
+
+/// Frames t−2, t−1, t, t+1 around the key frame, as the paper's figures show.
+fn panel_frames(s: Scenario) -> Vec<i64> {
+    let f = s.frames();
+    let i = f.iter().position(|&x| x == s.key_frame()).unwrap_or(2);
+    f[i.saturating_sub(2)..(i + 2).min(f.len())].to_vec()
+}
+
+fn frames_figure(
+    ctx: &Context<'_>,
+    s: Scenario,
+    sim: &Simulation,
+    example: &[(Method, TrackResult)],
+    file: &str,
+) -> Result<()> {
+    let frames = panel_frames(s);
+    let rows = sim.detections.rows();
+    // One window for every panel: what the shown frames (and the one before) contain, at
+    // equal scale on both axes for a panel about 1.6 times wider than high.
+    let first = frames[0];
+    let last = *frames.last().unwrap_or(&first);
+    let shown = |f: i64| f >= first - 1 && f <= last;
+    let mut pts: Vec<[f64; 2]> = Vec::new();
+    for t in &sim.truth {
+        for (f, p) in sim.frames.iter().zip(&t.position) {
+            if shown(*f) {
+                pts.push(*p);
+            }
+        }
+    }
+    pts.extend(
+        rows.iter()
+            .filter(|d| shown(d.frame) && d.target.is_some())
+            .map(|d| [d.position.x, d.position.y]),
+    );
+    if let Some((_, res)) = example.first() {
+        for (i, f) in res.frames.iter().enumerate() {
+            if shown(*f) {
+                for t in &res.records[i].targets {
+                    pts.extend(t.gate.points(8));
+                }
+            }
+        }
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in &pts {
+        for d in 0..2 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    const ASPECT: f64 = 1.6;
+    let h = ((hi[0] - lo[0]) / ASPECT).max(hi[1] - lo[1]).max(1.0) * 1.15;
+    let c = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+    let x_range = (c[0] - 0.5 * ASPECT * h, c[0] + 0.5 * ASPECT * h);
+    let y_range = (c[1] - 0.5 * h, c[1] + 0.5 * h);
+    let mut panels = Vec::new();
+    for &f in &frames {
+        let fi = sim.frames.iter().position(|&x| x == f).unwrap_or(0);
+        let mut layers = Vec::new();
+        for t in &sim.truth {
+            layers.push(Layer {
+                name: if t.target == 0 {
+                    "true paths".into()
+                } else {
+                    String::new()
+                },
+                style: XyStyle::Context,
+                kind: LayerKind::Path(t.position[..=fi].to_vec()),
+            });
+        }
+        for (mi, (m, res)) in example.iter().enumerate() {
+            let style = XyStyle::Series(if mi == 0 { 0 } else { 3 });
+            let Some(ri) = res.frames.iter().position(|&x| x == f) else {
+                continue;
+            };
+            for (k, t) in res.tracks.iter().enumerate() {
+                layers.push(Layer {
+                    name: if k == 0 {
+                        format!("{} tracks", m.label())
+                    } else {
+                        String::new()
+                    },
+                    style,
+                    kind: LayerKind::Path(t.position[..=ri].to_vec()),
+                });
+            }
+            if mi == 0 {
+                let rec = &res.records[ri];
+                layers.push(Layer {
+                    name: "EPF gates".into(),
+                    style,
+                    kind: LayerKind::Ellipses(rec.targets.iter().map(|t| t.gate).collect()),
+                });
+                layers.push(Layer {
+                    name: "EPF associations".into(),
+                    style,
+                    kind: LayerKind::Segments(
+                        rec.targets
+                            .iter()
+                            .filter_map(|t| {
+                                t.detection.map(|j| {
+                                    let y = rows[j].position;
+                                    [t.estimate, [y.x, y.y]]
+                                })
+                            })
+                            .collect(),
+                    ),
+                });
+            }
+        }
+        let dets: Vec<[f64; 2]> = rows[sim.detections.frame_rows(f)]
+            .iter()
+            .map(|d| [d.position.x, d.position.y])
+            .collect();
+        layers.push(Layer {
+            name: "detections".into(),
+            style: XyStyle::Series(2),
+            kind: LayerKind::Points(dets),
+        });
+        layers.push(Layer {
+            name: String::new(),
+            style: XyStyle::Series(2),
+            kind: LayerKind::Labels(
+                sim.truth
+                    .iter()
+                    .map(|t| (t.position[fi], format!("T{}", t.target + 1)))
+                    .collect(),
+            ),
+        });
+        let key_i = frames.iter().position(|&x| x == s.key_frame()).unwrap_or(0) as i64;
+        let rel = match frames.iter().position(|&x| x == f).unwrap_or(0) as i64 - key_i {
+            0 => "t".to_string(),
+            d if d < 0 => format!("t−{}", -d),
+            d => format!("t+{d}"),
+        };
+        panels.push(XyPlot {
+            title: format!("{rel} (frame {f})"),
+            x_label: "x (scene units)".into(),
+            y_label: "y (scene units)".into(),
+            layers,
+            legend: LegendPos::UpperRight,
+            x_range: Some(x_range),
+            y_range: Some(y_range),
+        });
+    }
+    // Legends only in the first panel, to keep the others readable.
+    for p in panels.iter_mut().skip(1) {
+        for l in &mut p.layers {
+            l.name.clear();
+        }
+    }
+    render_grid(
+        &ctx.path(file),
+        &format!("{}: detections, tracks and validation gates", title(s)),
+        &panels,
+        2,
+    )
+}
+
+fn fmt3(x: f64) -> String {
+    format!("{x:.3}")
+}
+
+fn energy_table(s: Scenario, sim: &Simulation, t: &EnergyTable) -> Table {
+    let rows = sim.detections.rows();
+    let paper = paper_e(s);
+    // Columns M_j ordered by their true source, as the paper numbers them.
+    let mut cols: Vec<usize> = (0..t.detections.len()).collect();
+    cols.sort_by_key(|&j| rows[t.detections[j]].target.unwrap_or(i64::MAX));
+    let mut out = Vec::new();
+    for (k, &id) in t.targets.iter().enumerate() {
+        for &j in &cols {
+            let src = rows[t.detections[j]].target;
+            let m = src.map_or("clutter".to_string(), |s| format!("M{}", s + 1));
+            let paper_cell = src
+                .and_then(|s| paper.get(k).and_then(|r| r.get(s as usize)))
+                .map_or("–".into(), |v| fmt3(*v));
+            out.push(vec![
+                format!("T{}", id + 1),
+                m,
+                fmt3(t.weighted[0][k][j]),
+                fmt3(t.weighted[1][k][j]),
+                fmt3(t.weighted[2][k][j]),
+                fmt3(t.e[k][j]),
+                paper_cell,
+                if t.gated[k][j] { "yes" } else { "no" }.into(),
+                if t.assignment[k] == Some(t.detections[j]) {
+                    "←"
+                } else {
+                    ""
+                }
+                .into(),
+            ]);
+        }
+    }
+    Table {
+        id: format!("{}-energies", s.name()),
+        caption: format!(
+            "{}: the weighted energies α₁E¹, α₂E², α₃E³ and their magnitude E (eq. (1)) of every \
+             target × detection at frame t = {} of the example run (the style of the paper's \
+             {}). M1, M2, … are the detections of T1, T2, …. \"E (paper)\" is the paper's value for the same \
+             pair on its own video, which we do not have: compare the pattern (the smallest \
+             E per row on the true pair), not the digits. The last column marks the EPF \
+             assignment.",
+            title(s),
+            t.frame,
+            match s {
+                Scenario::VanPlane => "Section 4 equations for Fig. 2",
+                Scenario::WalkingMen => "Table 1",
+                Scenario::Ants => "Table 2 (printed there ×100)",
+            }
+        ),
+        header: [
+            "target",
+            "detection",
+            "α₁E¹",
+            "α₂E²",
+            "α₃E³",
+            "E",
+            "E (paper)",
+            "in gate",
+            "EPF",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect(),
+        rows: out,
+    }
+}
+
+fn error_table(s: Scenario, comparisons: &[Comparison]) -> Table {
+    let mut rows = Vec::new();
+    for c in comparisons {
+        let sc = c.config.scenario;
+        for m in &c.methods {
+            let clean = sc.clutter == 0.0 && sc.miss == 0.0;
+            let paper = match (clean, m.method) {
+                (true, Method::Epf) => "all right at t",
+                (true, Method::Nnsf) => "wrong at t",
+                _ => "–",
+            };
+            rows.push(vec![
+                format!("{}", sc.clutter),
+                format!("{}", sc.miss),
+                m.method.label().into(),
+                format!("{:.3} ± {:.3}", m.error_rate_mean.0, m.error_rate_mean.1),
+                format!("{:.2} ± {:.2}", m.rmse_mean.0, m.rmse_mean.1),
+                format!("{:.2} ± {:.2}", m.ospa_mean.0, m.ospa_mean.1),
+                format!("{:.0} %", 100.0 * m.key_frame_right_rate),
+                paper.into(),
+            ]);
+        }
+    }
+    let reps = comparisons.first().map_or(0, |c| c.config.replications);
+    Table {
+        id: format!("{}-errors", s.name()),
+        caption: format!(
+            "{}: association error rate (fraction of target-frames whose associated \
+             detection is not the target's own), RMSE and OSPA (c = 5, p = 2) of the \
+             position estimates, mean ± standard error over {reps} runs, for the clean \
+             scenario and its clutter (mean detections per frame) and miss-probability \
+             variants. \"All right at t\": the fraction of runs in which every target took its \
+             own detection at the key frame t = {}. The paper gives no rates, only whether \
+             its one run's associations at t were right.",
+            title(s),
+            s.key_frame()
+        ),
+        header: [
+            "clutter",
+            "miss",
+            "method",
+            "association error rate",
+            "RMSE",
+            "OSPA",
+            "all right at t",
+            "paper (frame t)",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect(),
+        rows,
+    }
+}
+
+fn ablation_table(s: Scenario, c: &Comparison) -> Table {
+    let rows = c
+        .methods
+        .iter()
+        .map(|m| {
+            let paper = match m.method {
+                Method::Epf => "all right at t",
+                Method::EpfWithoutE2 if s == Scenario::Ants => {
+                    "E² and E³ outweigh E¹ for M₂ (Table 2)"
+                }
+                Method::EpfWithoutE3 if s == Scenario::Ants => "M₅ → T₆, wrong (Table 2)",
+                Method::EpfE1Only | Method::Nnsf => "wrong at t",
+                _ => "–",
+            };
+            vec![
+                m.method.label().to_string(),
+                format!("{:.3} ± {:.3}", m.error_rate_mean.0, m.error_rate_mean.1),
+                format!("{:.0} %", 100.0 * m.key_frame_right_rate),
+                paper.to_string(),
+            ]
+        })
+        .collect();
+    Table {
+        id: format!("{}-ablation", s.name()),
+        caption: format!(
+            "{}: which energies matter. EPF with E² or E³ left out of eq. (1), and with E¹ \
+             alone (NNSF's distance under the global assignment), on {} runs of the clean \
+             scenario: association error rate (mean ± standard error) and the fraction of \
+             runs with every association right at t = {}. The paper argues each component \
+             from single cases of its Table 2.",
+            title(s),
+            c.config.replications,
+            s.key_frame()
+        ),
+        header: [
+            "method",
+            "association error rate",
+            "all right at t",
+            "paper",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect(),
+        rows,
+    }
+}
+
+fn notes(scenarios: &[ScenarioResult], report: &mut SectionReport) {
+    let tc = TrackerConfig::default();
+    report.notes.push(
+        "The paper's video sequences are not available; each test is simulated \
+         (pf_epf::scenario) to reproduce its situation: van–plane, a detection nearer the \
+         wrong target's last position at frame t; walking men, two men crossing a metre apart \
+         at t, then turning, while a third walks back; ants, six erratic ants seen at frames \
+         0, 10, 25, 35, 45. Our numbers therefore cannot match the paper's digits, only its \
+         claims."
+            .into(),
+    );
+    report.notes.push(
+        "E¹ is measured from Â(t−1), the target's previous estimate, as the paper's formula \
+         writes it; NNSF uses the same distance (each detection to the nearest validated \
+         target, as Section 4 applies it). The validation gate is centred on the prediction \
+         Â(t). We also report nearest neighbour to Â(t) (\"NN to Â(t)\"), which the paper \
+         does not: it uses the dynamics directly and is a strong baseline."
+            .into(),
+    );
+    report.notes.push(format!(
+        "Values the paper leaves unstated, chosen here: N = {} particles per target in the \
+         report (500 on the command line), multinomial resampling when N_eff < {}·N, gate \
+         mass P_G = {}, detection noise r = the scenario's (0.15 or 0.3), process noise q = \
+         0.3 (van–plane, walking men) or 1.0 per √frame (ants). The dynamic model that moves \
+         the particles and centres the gates takes its velocity from the last two associated \
+         detections (the B-spline's chord: its quadratic end amplifies detection noise \
+         √14-fold and lost more associations); E²'s predictions Â₁(t+1), Â₂(t+1) use the \
+         quadratic end, since under constant velocity the triangle (Â(t−1), y_j, Â₂(t+1)) is \
+         always straight and E² would say nothing. A circumcircle counts as a straight line \
+         above {}× its triangle's longest side (turns under 14.5°; with 20×, turns under \
+         1.4°, E² followed the detection noise and EPF's error rate rose from 0.228 to 0.277 \
+         on walking men and from 0.197 to 0.214 on ants, against NNSF's 0.308 and 0.219, 200 \
+         runs, `cargo run --release --example compare -p pf-epf`), and E³'s area is floored \
+         at {}× the reference triangle's.",
+        scenarios
+            .first()
+            .map_or(0, |s| s.comparisons[0].config.tracker.n_particles),
+        tc.ess_fraction,
+        tc.gate_probability,
+        tc.energy.radius_cap,
+        tc.energy.e3_floor
+    ));
+    for s in scenarios {
+        let mut parts = Vec::new();
+        for c in &s.comparisons {
+            let get = |m: Method| c.methods.iter().find(|x| x.method == m);
+            if let (Some(e), Some(n), Some(p)) = (
+                get(Method::Epf),
+                get(Method::Nnsf),
+                get(Method::NnPredicted),
+            ) {
+                parts.push(format!(
+                    "clutter {}, miss {}: EPF {:.3}, NNSF {:.3} ({:+.3}), NN to Â(t) {:.3}",
+                    c.config.scenario.clutter,
+                    c.config.scenario.miss,
+                    e.error_rate_mean.0,
+                    n.error_rate_mean.0,
+                    e.error_rate_mean.0 - n.error_rate_mean.0,
+                    p.error_rate_mean.0
+                ));
+            }
+        }
+        report.notes.push(format!(
+            "{}: association error rates (EPF minus NNSF in brackets): {}.",
+            title(s.scenario),
+            parts.join("; ")
+        ));
+    }
+    let mut parts = Vec::new();
+    for s in scenarios {
+        let rate = |m: Method| {
+            s.ablation
+                .methods
+                .iter()
+                .find(|x| x.method == m)
+                .map_or(f64::NAN, |x| x.error_rate_mean.0)
+        };
+        parts.push(format!(
+            "{}: EPF {:.3}, without E² {:.3}, without E³ {:.3}, E¹ only {:.3}, NNSF {:.3}",
+            title(s.scenario),
+            rate(Method::Epf),
+            rate(Method::EpfWithoutE2),
+            rate(Method::EpfWithoutE3),
+            rate(Method::EpfE1Only),
+            rate(Method::Nnsf)
+        ));
+    }
+    report.notes.push(format!(
+        "Ablation of eq. (1), association error rates: {}. At the default scale (seed 1) E³ \
+         changes nothing measurable: with motion that turns by less than 14.5° between \
+         observations its reference triangle is straight and E³ = 0, and where it is not, \
+         the other components already decide. E² helps where targets move straight and \
+         cross (van–plane, walking men) and hurts on the erratic, sparsely observed ants, \
+         where E¹ alone under the global assignment does best: the gain over NNSF there \
+         comes from the one-to-one assignment, not from the geometry. The paper argues for \
+         E² and E³ from single detections of its Table 2 and reports no such average.",
+        parts.join("; ")
+    ));
+    report.notes.push(
+        "Ants with heavy clutter (3 per frame, 20 % misses) is the one case where EPF does \
+         worse than NNSF. Counting the failures over 300 runs (N = 200; `cargo run --release \
+         --example clutter -p pf-epf`): EPF gives a target a clutter detection in 12.4 % of \
+         target-frames (NNSF 11.6 %) and another ant's in 8.9 % (NNSF 7.7 %), and misses its \
+         own less often (14.6 % against 15.7 %). The normalised magnitude E of eq. (1) is \
+         relative among the targets (α_l divides by the column sum), so it cannot say that a \
+         detection is far from every target; the global assignment then fills a target's \
+         slot with whatever its wide ant gate (≈ 12 units) holds. The paper has no clutter \
+         experiment to compare with."
+            .into(),
+    );
+    report.notes.push(
+        "The energy tables weight each component by α_l = 1/Σ_k E^l(k, y_j) over all K \
+         targets, as eq. (1) writes it, so a row of α₃E³ is 0 for a target moving straight \
+         (E³ = 0: \"most of time the third energy is null\", Table 1) and α_l E^l is 1 for the \
+         only target with a non-zero component. The paper's Table 2 prints values ×100."
+            .into(),
+    );
 }

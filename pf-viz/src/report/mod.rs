@@ -67,6 +67,10 @@ pub struct SectionReport {
     pub notes: Vec<String>,
     /// Other files written (`.rrd` recordings, CSV), relative to the output directory.
     pub files: Vec<String>,
+    /// JSON pointers into `result` (e.g. `/rmse/seconds_per_run`) to the numbers that depend
+    /// on measured wall-clock time (timings, and searches driven by them): the only parts of
+    /// `summary.json` that differ between runs with the same seed.
+    pub timing_dependent: Vec<String>,
 }
 
 /// A figure of the report: a PNG in the output directory and its caption.
@@ -174,6 +178,9 @@ pub struct Summary {
     pub rrd: RrdOutput,
     /// Each section's result, by name.
     pub sections: BTreeMap<&'static str, serde_json::Value>,
+    /// Per section, JSON pointers into its result to the numbers that depend on measured
+    /// time; everything else is identical for the same seed, whatever `--jobs`.
+    pub timing_dependent: BTreeMap<&'static str, Vec<String>>,
 }
 
 /// The sections `--only` selects, in registry order; all of them when it is empty.
@@ -253,6 +260,11 @@ fn run_sections(args: &ReportArgs, selected: &[&'static Section]) -> Result<Summ
         sections: reports
             .iter()
             .map(|(s, r)| (s.name, r.result.clone()))
+            .collect(),
+        timing_dependent: reports
+            .iter()
+            .filter(|(_, r)| !r.timing_dependent.is_empty())
+            .map(|(s, r)| (s.name, r.timing_dependent.clone()))
             .collect(),
     };
     write_json(&ctx.path(SUMMARY), &summary)?;

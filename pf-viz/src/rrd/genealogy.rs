@@ -30,6 +30,8 @@ use crate::png::genealogy::GenealogyData;
 
 /// Root entity of the genealogy.
 pub const ROOT: &str = "core/genealogy";
+/// The paper prefix of the core recording's entities.
+const PREFIX: &str = "core";
 /// Entity of the ESS trace.
 pub const ESS: &str = "core/ess";
 
@@ -103,26 +105,35 @@ pub fn save(path: &Path, data: &GenealogyData, extras: &GenealogyExtras<'_>) -> 
         });
     }
     save_rrd(path, "pf-viz: particle genealogy", |rec, path| {
-        log(rec, path, data, extras)
+        blueprint()
+            .send(rec, BlueprintActivation::default())
+            .map_err(rrd_err(path))?;
+        log_genealogy(rec, path, data, extras, PREFIX)
     })
 }
 
-fn log(
+/// Log the genealogy under `{prefix}/genealogy` and the ESS trace under `{prefix}/ess`
+/// into an open recording, on the `step` timeline (no blueprint: the caller lays out its
+/// recording). `path` only names the file in errors.
+///
+/// # Errors
+/// A Rerun error naming `path`, or an inconsistent genealogy.
+pub fn log_genealogy(
     rec: &RecordingStream,
     path: &Path,
     data: &GenealogyData,
     extras: &GenealogyExtras<'_>,
+    prefix: &str,
 ) -> Result<()> {
     let err = rrd_err(path);
     let frame = Frame::new(data);
     let (steps, n) = (data.n_steps(), data.n_particles());
+    let root = format!("{prefix}/genealogy");
+    let ess_entity = format!("{prefix}/ess");
 
-    blueprint()
-        .send(rec, BlueprintActivation::default())
-        .map_err(&err)?;
-    log_axes(rec, data, frame).map_err(&err)?;
+    log_axes(rec, data, frame, &root).map_err(&err)?;
     rec.log_static(
-        ESS,
+        ess_entity.as_str(),
         &SeriesLines::new()
             .with_names(["effective sample size"])
             .with_colors([DARK_BLUE])
@@ -143,7 +154,7 @@ fn log(
                 ]);
             }
             rec.log(
-                format!("{ROOT}/all"),
+                format!("{root}/all"),
                 &LineStrips2D::new(segments.iter().map(|s| s.to_vec()))
                     .with_colors([LIGHT])
                     .with_radii([Radius::new_ui_points(0.5)])
@@ -153,7 +164,7 @@ fn log(
         }
         points.extend(data.positions[k].iter().map(|&x| frame.at(k, x)));
         rec.log(
-            format!("{ROOT}/particles"),
+            format!("{root}/particles"),
             &Points2D::new(points.iter().copied())
                 .with_colors([GREY])
                 .with_radii([Radius::new_ui_points(1.5)])
@@ -165,7 +176,7 @@ fn log(
             .iter()
             .map(|&w| Radius::new_ui_points((2.5 * (n as f64 * w).sqrt()).clamp(1.0, 12.0) as f32));
         rec.log(
-            format!("{ROOT}/current"),
+            format!("{root}/current"),
             &Points2D::new(data.positions[k].iter().map(|&x| frame.at(k, x)))
                 .with_colors([CURRENT])
                 .with_radii(radii)
@@ -183,7 +194,7 @@ fn log(
                 .map(|(j, &idx)| frame.at(j, data.positions[j][idx]))
                 .collect();
             rec.log(
-                format!("{ROOT}/lineage_{i}"),
+                format!("{root}/lineage_{i}"),
                 &LineStrips2D::new([strip])
                     .with_colors([DARK_BLUE])
                     .with_radii([Radius::new_ui_points(1.5)])
@@ -191,13 +202,13 @@ fn log(
             )
             .map_err(&err)?;
         }
-        rec.log(ESS, &Scalars::single(extras.ess[k]))
+        rec.log(ess_entity.as_str(), &Scalars::single(extras.ess[k]))
             .map_err(&err)?;
     }
     if let Some(t) = data.coalescence_time {
         let (lo, hi) = y_extent(data, frame);
         rec.log(
-            format!("{ROOT}/coalescence"),
+            format!("{root}/coalescence"),
             &LineStrips2D::new([[[t as f32, lo], [t as f32, hi]]])
                 .with_colors([RED])
                 .with_radii([Radius::new_ui_points(2.0)])
@@ -224,13 +235,14 @@ fn log_axes(
     rec: &RecordingStream,
     data: &GenealogyData,
     frame: Frame,
+    root: &str,
 ) -> rerun::RecordingStreamResult<()> {
     let last = data.n_steps() - 1;
     let (top, bottom) = y_extent(data, frame);
     let left = -0.02 * last.max(1) as f32;
     let right = last as f32;
     rec.log_static(
-        format!("{ROOT}/axes/frame"),
+        format!("{root}/axes/frame"),
         &LineStrips2D::new([vec![[left, top], [left, bottom], [right, bottom]]])
             .with_colors([AXIS])
             .with_radii([Radius::new_ui_points(0.75)])
@@ -240,7 +252,7 @@ fn log_axes(
     let k_ticks: Vec<usize> = (0..=last).step_by(k_step).collect();
     let tick_len = 0.015 * (bottom - top);
     rec.log_static(
-        format!("{ROOT}/axes/k"),
+        format!("{root}/axes/k"),
         &Points2D::new(k_ticks.iter().map(|&k| [k as f32, bottom + 2.0 * tick_len]))
             .with_labels(k_ticks.iter().map(|k| format!("k = {k}")))
             .with_colors([AXIS])
@@ -259,7 +271,7 @@ fn log_axes(
     let last_tick = (x_hi / x_step).floor() as i64;
     let x_ticks: Vec<f64> = (first..=last_tick).map(|j| j as f64 * x_step).collect();
     rec.log_static(
-        format!("{ROOT}/axes/xi"),
+        format!("{root}/axes/xi"),
         &Points2D::new(x_ticks.iter().map(|&x| [left, frame.at(0, x)[1]]))
             .with_labels(x_ticks.iter().map(|x| format!("ξ = {}", fmt_tick(*x))))
             .with_colors([AXIS])
@@ -268,7 +280,7 @@ fn log_axes(
     )?;
     // Faint horizontal grid lines at the ξ ticks.
     rec.log_static(
-        format!("{ROOT}/axes/grid"),
+        format!("{root}/axes/grid"),
         &LineStrips2D::new(x_ticks.iter().map(|&x| {
             let y = frame.at(0, x)[1];
             vec![[left, y], [right, y]]

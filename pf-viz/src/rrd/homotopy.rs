@@ -1,1 +1,157 @@
-//! `homotopy.rrd`.
+//! `homotopy.rrd`: the OHF correction as λ goes from 0 to 1, and one tracking run.
+//!
+//! - `lambda` timeline (λ in thousandths, 0…1000): the error ellipse of the OHF's Gaussian
+//!   parameterisation at sample 17 (`homotopy/ellipse/lambda`) and the true position.
+//! - `step` timeline: target and observer with their trails, the measured bearing as a ray
+//!   from the observer (`homotopy/scene/bearing`), and every filter's estimate
+//!   (`homotopy/scene/estimate/<filter>`).
+//!
+//! The blueprint shows the two as side-by-side 2-D views.
+
+use std::path::Path;
+
+use pf_homotopy::experiments::EllipsesResult;
+use pf_homotopy::model::Realisation;
+use rerun::blueprint::{Blueprint, BlueprintActivation, Horizontal, Spatial2DView};
+use rerun::components::Radius;
+use rerun::{LineStrips2D, Points2D, RecordingStream};
+
+use super::{LAMBDA, STEP, rrd_err, save_rrd};
+use crate::error::{Result, VizError};
+
+const RED: [u8; 4] = [220, 50, 50, 255];
+const GREY: [u8; 4] = [170, 170, 170, 255];
+const OBSERVER: [u8; 4] = [240, 170, 40, 255];
+/// One colour per filter, in the order of `Algorithm::ALL`.
+const FILTERS: [[u8; 4]; 4] = [
+    [90, 160, 255, 255],
+    [120, 220, 120, 255],
+    [230, 90, 230, 255],
+    [240, 240, 240, 255],
+];
+/// Length of a drawn bearing ray (m).
+const RAY: f64 = 15_000.0;
+
+/// Write `homotopy.rrd` from the ellipses over λ and one realisation with each filter's
+/// position estimates (`(name, estimate per sample)`).
+///
+/// # Errors
+/// Estimates whose length does not match the realisation, or a Rerun or I/O error naming
+/// `path`.
+pub fn save(
+    path: &Path,
+    ellipses: &EllipsesResult,
+    real: &Realisation,
+    estimates: &[(&str, Vec<[f64; 2]>)],
+) -> Result<()> {
+    let n = real.target.len();
+    if real.observer.len() != n || estimates.iter().any(|(_, e)| e.len() != n) {
+        return Err(VizError::PlotData {
+            what: "homotopy recording",
+            message: format!("estimates do not cover the {n} samples of the realisation"),
+        });
+    }
+    save_rrd(path, "pf-viz: optimal homotopy filter", |rec, path| {
+        log(rec, ellipses, real, estimates).map_err(rrd_err(path))
+    })
+}
+
+fn log(
+    rec: &RecordingStream,
+    ell: &EllipsesResult,
+    real: &Realisation,
+    estimates: &[(&str, Vec<[f64; 2]>)],
+) -> rerun::RecordingStreamResult<()> {
+    blueprint().send(rec, BlueprintActivation::default())?;
+    let f = |p: [f64; 2]| [p[0] as f32, p[1] as f32];
+    rec.log_static(
+        "homotopy/ellipse/truth",
+        &Points2D::new([f(ell.truth)])
+            .with_colors([RED])
+            .with_radii([Radius::new_ui_points(5.0)])
+            .with_labels(["true position"]),
+    )?;
+    for (l, e) in ell.lambda.iter().zip(&ell.ellipses) {
+        rec.set_time_sequence(LAMBDA, (l * 1000.0).round() as i64);
+        let outline = pf_core::gaussian::ErrorEllipse {
+            centre: e.center,
+            semi_axes: e.semi_axes,
+            angle: e.angle,
+        }
+        .points(72);
+        let mut strip: Vec<[f32; 2]> = outline.iter().map(|&p| f(p)).collect();
+        strip.push(strip[0]);
+        rec.log(
+            "homotopy/ellipse/lambda",
+            &LineStrips2D::new([strip])
+                .with_colors([FILTERS[0]])
+                .with_radii([Radius::new_ui_points(2.0)])
+                .with_labels([format!("λ = {l}")]),
+        )?;
+        rec.log(
+            "homotopy/ellipse/mean",
+            &Points2D::new([f(e.center)])
+                .with_colors([FILTERS[0]])
+                .with_radii([Radius::new_ui_points(3.0)]),
+        )?;
+    }
+    for k in 0..real.target.len() {
+        rec.set_time_sequence(STEP, k as i64 + 1);
+        let x = real.target[k];
+        let o = real.observer[k].pos;
+        let target_trail: Vec<[f32; 2]> = real.target[..=k]
+            .iter()
+            .map(|x| [x[0] as f32, x[1] as f32])
+            .collect();
+        let observer_trail: Vec<[f32; 2]> = real.observer[..=k].iter().map(|o| f(o.pos)).collect();
+        rec.log(
+            "homotopy/scene/target",
+            &Points2D::new([[x[0] as f32, x[1] as f32]])
+                .with_colors([RED])
+                .with_radii([Radius::new_ui_points(5.0)])
+                .with_labels(["target"]),
+        )?;
+        rec.log(
+            "homotopy/scene/target_trail",
+            &LineStrips2D::new([target_trail]).with_colors([RED]),
+        )?;
+        rec.log(
+            "homotopy/scene/observer",
+            &Points2D::new([f(o)])
+                .with_colors([OBSERVER])
+                .with_radii([Radius::new_ui_points(5.0)])
+                .with_labels(["observer"]),
+        )?;
+        rec.log(
+            "homotopy/scene/observer_trail",
+            &LineStrips2D::new([observer_trail]).with_colors([OBSERVER]),
+        )?;
+        let b = real.bearings[k];
+        rec.log(
+            "homotopy/scene/bearing",
+            &LineStrips2D::new([[f(o), f([o[0] + RAY * b.cos(), o[1] + RAY * b.sin()])]])
+                .with_colors([GREY]),
+        )?;
+        for ((name, est), color) in estimates.iter().zip(FILTERS) {
+            rec.log(
+                format!("homotopy/scene/estimate/{name}"),
+                &Points2D::new([f(est[k])])
+                    .with_colors([color])
+                    .with_radii([Radius::new_ui_points(4.0)])
+                    .with_labels([*name]),
+            )?;
+        }
+    }
+    Ok(())
+}
+
+fn blueprint() -> Blueprint {
+    Blueprint::new(Horizontal::new([
+        Spatial2DView::new("tracking run: target, observer, bearing, estimates (m; step)")
+            .with_origin("homotopy/scene")
+            .into(),
+        Spatial2DView::new("OHF ellipse at sample 17 as λ goes 0 → 1 (m; lambda × 1000)")
+            .with_origin("homotopy/ellipse")
+            .into(),
+    ]))
+}
