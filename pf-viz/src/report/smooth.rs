@@ -16,7 +16,7 @@
 use pf_core::filter::ParticleFilter;
 use pf_core::mc::stream_rng;
 use pf_core::models::NoisyAr1;
-use pf_core::observe::{CloudRecorder, GenealogyRecorder};
+use pf_core::observe::{CloudRecorder, EssRecorder, GenealogyRecorder};
 use pf_smooth::em::paper_filter_config;
 use pf_smooth::experiments::{
     EmExperiment, EmResult, LagSweep, LagSweepResult, SemExperiment, SemResult, em, lag_sweep, sem,
@@ -247,7 +247,8 @@ pub fn run(ctx: &Context<'_>, config: SmoothConfig) -> Result<SmoothResult> {
     let mut files = Vec::new();
 
     // Fig. 1.
-    let genealogy = genealogy(ctx, &config, &data, &xs)?;
+    let fig1 = genealogy(ctx, &config, &data, &xs)?;
+    let genealogy = fig1.data.clone();
     png::genealogy::render(
         &ctx.path("smooth-fig1-genealogy.png"),
         &genealogy,
@@ -387,7 +388,12 @@ pub fn run(ctx: &Context<'_>, config: SmoothConfig) -> Result<SmoothResult> {
     if ctx.write_rrd() {
         #[cfg(feature = "rrd")]
         {
-            crate::rrd::smooth::save(&ctx.path("smooth.rrd"), &genealogy, &sem_result)?;
+            let extras = crate::rrd::genealogy::GenealogyExtras {
+                genealogy: fig1.recorder.genealogy(),
+                weights: &fig1.weights,
+                ess: &fig1.ess,
+            };
+            crate::rrd::smooth::save(&ctx.path("smooth.rrd"), &genealogy, &extras, &sem_result)?;
             files.push("smooth.rrd".to_owned());
         }
     }
@@ -406,12 +412,7 @@ pub fn run(ctx: &Context<'_>, config: SmoothConfig) -> Result<SmoothResult> {
 }
 
 /// Fig. 1: a bootstrap filter with the genealogy recorded, on the first steps of the data.
-fn genealogy(
-    ctx: &Context<'_>,
-    config: &SmoothConfig,
-    data: &Ar1Data,
-    xs: &[f64],
-) -> Result<GenealogyData> {
+fn genealogy(ctx: &Context<'_>, config: &SmoothConfig, data: &Ar1Data, xs: &[f64]) -> Result<Fig1> {
     let wrap = VizError::paper(PAPER);
     let core = |e: pf_core::CoreError| wrap(e.into());
     let d = data
@@ -420,7 +421,11 @@ fn genealogy(
     let model = config.truth.model(d.y()[0]).map_err(wrap)?;
     let mut pf = ParticleFilter::bootstrap(model, paper_filter_config(config.genealogy_particles))
         .map_err(core)?;
-    let mut obs = (CloudRecorder::new(), GenealogyRecorder::new());
+    let mut obs = (
+        CloudRecorder::new(),
+        GenealogyRecorder::new(),
+        EssRecorder::new(),
+    );
     pf.run(
         &d.filter_input(),
         None,
@@ -428,21 +433,35 @@ fn genealogy(
         &mut obs,
     )
     .map_err(core)?;
-    let (clouds, g) = obs;
-    let g = g.genealogy();
+    let (clouds, recorder, ess) = obs;
+    let g = recorder.genealogy();
     let ancestors = (0..g.n_steps())
         .map(|k| g.ancestors(k).map(<[usize]>::to_vec).unwrap_or_default())
         .collect();
-    Ok(GenealogyData {
+    let data = GenealogyData {
         positions: clouds.positions(),
         ancestors,
         surviving: g.alive_per_step(),
         coalescence_time: g.coalescence_time(),
         truth: Some(xs[..=d.n()].to_vec()),
+    };
+    Ok(Fig1 {
+        data,
+        weights: clouds.clouds.iter().map(|c| c.weights.clone()).collect(),
+        ess: ess.ess(),
+        recorder,
     })
 }
 
-/// Three panels (φ, σ², ρ²) of boxes, with the exact update as the reference line.
+/// Fig. 1's run: the figure's data, and what the recording adds (weights, ESS, genealogy).
+#[cfg_attr(not(feature = "rrd"), allow(dead_code))]
+struct Fig1 {
+    data: GenealogyData,
+    weights: Vec<Vec<f64>>,
+    ess: Vec<f64>,
+    recorder: GenealogyRecorder,
+}
+
 fn list(v: &[usize]) -> String {
     v.iter()
         .map(usize::to_string)
@@ -450,6 +469,7 @@ fn list(v: &[usize]) -> String {
         .join(", ")
 }
 
+/// Three panels (φ, σ², ρ²) of boxes, with the exact update as the reference line.
 fn update_boxes(
     title: &str,
     groups: &[(String, &ThetaSamples)],

@@ -3,9 +3,7 @@
 //!
 //! | entity | archetype | what |
 //! |---|---|---|
-//! | `smooth/genealogy/all` | `LineStrips2D` | every parent → child segment up to step `k`, light grey |
-//! | `smooth/genealogy/current` | `Points2D` | the particles of step `k` |
-//! | `smooth/genealogy/lineages` | `LineStrips2D` | the ancestral lines `ξ_{0:k}^i` of the particles of step `k`, dark |
+//! | `smooth/genealogy/…`, `smooth/ess` | as in [`rrd::genealogy`](super::genealogy) | the genealogy of Fig. 1 and its ESS on `step` (the shared logger) |
 //! | `smooth/genealogy_final/{all,lineages}` | `LineStrips2D` | static: the whole genealogy and the surviving lineages |
 //! | `smooth/sem/<param>/chain_<c>` | `Scalars` | SEM chain `c` at each iteration |
 //! | `smooth/sem/<param>/exact` | `Scalars` | the exact EM trajectory |
@@ -25,9 +23,10 @@ use rerun::blueprint::{
     Vertical,
 };
 use rerun::components::Radius;
-use rerun::{LineStrips2D, Points2D, RecordingStream, Scalars, SeriesLines};
+use rerun::{LineStrips2D, RecordingStream, Scalars, SeriesLines};
 
-use super::{ITERATION, STEP, rrd_err, save_rrd};
+use super::genealogy::{GenealogyExtras, log_genealogy};
+use super::{ITERATION, rrd_err, save_rrd};
 use crate::error::Result;
 use crate::png::genealogy::GenealogyData;
 
@@ -40,7 +39,6 @@ pub const SEM: &str = "smooth/sem";
 
 const LIGHT: [u8; 4] = [130, 130, 130, 120];
 const DARK_BLUE: [u8; 4] = [40, 90, 200, 255];
-const CURRENT: [u8; 4] = [240, 170, 40, 255];
 const CHAINS: [[u8; 4]; 4] = [
     [230, 120, 40, 255],
     [60, 170, 90, 255],
@@ -61,20 +59,27 @@ const PARAMS: [(&str, &str, Pick); 3] = [
 ///
 /// # Errors
 /// Inconsistent genealogy data, or a Rerun or I/O error naming `path`.
-pub fn save(path: &Path, genealogy: &GenealogyData, sem: &SemResult) -> Result<()> {
+pub fn save(
+    path: &Path,
+    genealogy: &GenealogyData,
+    extras: &GenealogyExtras<'_>,
+    sem: &SemResult,
+) -> Result<()> {
     genealogy.validate()?;
     save_rrd(path, "pf-viz: smooth (Cappé & Moulines)", |rec, path| {
         let err = rrd_err(path);
         blueprint(sem.sem.len())
             .send(rec, BlueprintActivation::default())
             .map_err(&err)?;
-        log_genealogy(rec, genealogy).map_err(&err)?;
+        log_genealogy(rec, path, genealogy, extras, "smooth")?;
+        log_final(rec, genealogy).map_err(&err)?;
         log_sem(rec, sem).map_err(&err)?;
         Ok(())
     })
 }
 
-fn log_genealogy(rec: &RecordingStream, data: &GenealogyData) -> rerun::RecordingStreamResult<()> {
+/// The genealogy at its last step, static, so that it shows on the `iteration` timeline too.
+fn log_final(rec: &RecordingStream, data: &GenealogyData) -> rerun::RecordingStreamResult<()> {
     let (steps, n) = (data.n_steps(), data.n_particles());
     let (lo, hi) = data
         .positions
@@ -87,40 +92,24 @@ fn log_genealogy(rec: &RecordingStream, data: &GenealogyData) -> rerun::Recordin
     let at = |k: usize, x: f64| [k as f32, (-c * x) as f32];
     let at_idx = |j: usize, idx: usize| at(j, data.positions[j][idx]);
     let mut segments: Vec<[[f32; 2]; 2]> = Vec::with_capacity(n * steps);
-    // lineage[i] = index at each earlier step of the ancestor of particle i of step k.
+    // lineages[i][j]: index at step j of the ancestor of particle i of the current step.
     let mut lineages: Vec<Vec<usize>> = (0..n).map(|i| vec![i]).collect();
-    for k in 0..steps {
-        rec.set_time_sequence(STEP, k as i64);
-        if k > 0 {
-            for i in 0..n {
-                let a = data.ancestors[k][i];
-                segments.push([
-                    at(k - 1, data.positions[k - 1][a]),
-                    at(k, data.positions[k][i]),
-                ]);
-            }
-            rec.log(format!("{GENEALOGY}/all"), &all_paths(&segments))?;
-            lineages = (0..n)
-                .map(|i| {
-                    let mut l = lineages[data.ancestors[k][i]].clone();
-                    l.push(i);
-                    l
-                })
-                .collect();
+    for k in 1..steps {
+        for i in 0..n {
+            let a = data.ancestors[k][i];
+            segments.push([
+                at(k - 1, data.positions[k - 1][a]),
+                at(k, data.positions[k][i]),
+            ]);
         }
-        rec.log(
-            format!("{GENEALOGY}/lineages"),
-            &lineage_strips(&lineages, &at_idx),
-        )?;
-        rec.log(
-            format!("{GENEALOGY}/current"),
-            &Points2D::new(data.positions[k].iter().map(|&x| at(k, x)))
-                .with_colors([CURRENT])
-                .with_radii([Radius::new_ui_points(3.0)])
-                .with_draw_order(40.0),
-        )?;
+        lineages = (0..n)
+            .map(|i| {
+                let mut l = lineages[data.ancestors[k][i]].clone();
+                l.push(i);
+                l
+            })
+            .collect();
     }
-    // The final picture, static.
     rec.log_static(format!("{FINAL}/all"), &all_paths(&segments))?;
     rec.log_static(
         format!("{FINAL}/lineages"),
@@ -129,7 +118,7 @@ fn log_genealogy(rec: &RecordingStream, data: &GenealogyData) -> rerun::Recordin
     Ok(())
 }
 
-/// Every parent → child segment so far, thin and light.
+/// Every parent → child segment, thin and light.
 fn all_paths(segments: &[[[f32; 2]; 2]]) -> LineStrips2D {
     LineStrips2D::new(segments.iter().map(|s| s.to_vec()))
         .with_colors([LIGHT])
