@@ -73,7 +73,11 @@ impl<R: BufRead> CsvSamples<R> {
                 "the file is empty: expected a header `t,V_t,m_t,Q_i,rho_i`",
             ));
         }
-        let names: Vec<&str> = buf.trim_end_matches(['\n', '\r']).split(',').map(str::trim).collect();
+        let names: Vec<&str> = buf
+            .trim_end_matches(['\n', '\r'])
+            .split(',')
+            .map(str::trim)
+            .collect();
         let mut cols = [None; 7];
         for (slot, want) in cols.iter_mut().zip(REQUIRED.iter().chain(TRUTH.iter())) {
             let mut hits = names.iter().enumerate().filter(|(_, n)| *n == want);
@@ -183,12 +187,17 @@ impl<R: BufRead> CsvSamples<R> {
                 .parse()
                 .map_err(|_| csv_err(line, format!("{name} = `{f}` is not a number")))?;
             if !x.is_finite() {
-                return Err(csv_err(line, format!("{name} = `{f}` is not a finite number")));
+                return Err(csv_err(
+                    line,
+                    format!("{name} = `{f}` is not a finite number"),
+                ));
             }
             if *name != "t" && x < 0.0 {
                 return Err(csv_err(
                     line,
-                    format!("{name} = {x} is negative: volumes, masses, flows and densities cannot be"),
+                    format!(
+                        "{name} = {x} is negative: volumes, masses, flows and densities cannot be"
+                    ),
                 ));
             }
             *slot = Some(x);
@@ -256,7 +265,10 @@ pub fn read_csv<R: BufRead>(reader: R) -> Result<DredgeData> {
     };
     for row in &mut rows {
         let Row {
-            sample: s, q_o, rho_o, ..
+            sample: s,
+            q_o,
+            rho_o,
+            ..
         } = row?;
         d.t.push(s.t);
         d.v_t.push(s.v_t);
@@ -343,21 +355,36 @@ mod tests {
         let h = "t,V_t,m_t,Q_i,rho_i\n";
         assert!(err("").contains("line 1") && err("").contains("empty"));
         let e = err("t,V_t,Q_i,rho_i\n0,1,2,3\n");
-        assert!(e.contains("line 1") && e.contains("missing column(s) m_t"), "{e}");
+        assert!(
+            e.contains("line 1") && e.contains("missing column(s) m_t"),
+            "{e}"
+        );
         let e = err(&format!("{h}0,1,2,3,4\n5,1,abc,3,4\n"));
         assert!(e.contains("line 3") && e.contains("not a number"), "{e}");
         let e = err(&format!("{h}0,1,2,3,4\n0,1,2,3,4\n"));
-        assert!(e.contains("line 3") && e.contains("time does not increase"), "{e}");
+        assert!(
+            e.contains("line 3") && e.contains("time does not increase"),
+            "{e}"
+        );
         let e = err(&format!("{h}0,1,2,3,4\n5,1,2,-3,4\n"));
-        assert!(e.contains("line 3") && e.contains("Q_i = -3 is negative"), "{e}");
+        assert!(
+            e.contains("line 3") && e.contains("Q_i = -3 is negative"),
+            "{e}"
+        );
         let e = err(&format!("{h}0,1,2,3,-4\n"));
-        assert!(e.contains("line 2") && e.contains("rho_i = -4 is negative"), "{e}");
+        assert!(
+            e.contains("line 2") && e.contains("rho_i = -4 is negative"),
+            "{e}"
+        );
         let e = err(h);
         assert!(e.contains("line 2") && e.contains("no data rows"), "{e}");
         let e = err(&format!("{h}0,1,2,3\n"));
         assert!(e.contains("line 2") && e.contains("4 field(s)"), "{e}");
         let e = err(&format!("{h}0,,2,3,4\n"));
-        assert!(e.contains("line 2") && e.contains("first sample has no V_t"), "{e}");
+        assert!(
+            e.contains("line 2") && e.contains("first sample has no V_t"),
+            "{e}"
+        );
         let e = err(&format!("{h}0,1,2,3,inf\n"));
         assert!(e.contains("not a finite number"), "{e}");
     }
