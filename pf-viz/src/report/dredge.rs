@@ -1,7 +1,22 @@
 //! Report section for Babuška et al.: on-line estimation of overflow losses in a hopper dredger.
+//!
+//! Figures 3–8 of the paper on our simulated cycle, the residual table with the paper's
+//! numbers beside ours, the `N` sweep, and `dredge.rrd`. The experiments are
+//! [`pf_dredge::experiments`]; this file only draws them.
 
-use super::{Context, Section, SectionReport};
-use crate::error::Result;
+use serde::Serialize;
+
+use super::{Context, Figure, Section, SectionReport, Table, to_json};
+use crate::cli::Scale;
+use crate::error::{Result, VizError};
+use crate::png::histogram::{self, HistData, HistPanel, HistStats, HistogramPlot};
+use crate::png::line::{self, Band, LinePlot, Series};
+use crate::png::style::LegendPos;
+use pf_dredge::experiments::{
+    self as ex, CycleConfig, Fig7Config, Fig7Result, Fig8Config, Fig8Result, Fig56Config,
+    Fig56Result, NSweepConfig, NSweepResult,
+};
+use pf_dredge::simulator::Cycle;
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
@@ -10,6 +25,477 @@ pub const SECTION: Section = Section {
     run: run_section,
 };
 
-fn run_section(_ctx: &Context<'_>) -> Result<SectionReport> {
-    Ok(SectionReport::default())
+/// Every number behind the section's figures and table, with the configs.
+#[derive(Debug, Serialize)]
+struct DredgeResult {
+    seed: u64,
+    cycle_config: CycleConfig,
+    cycle: Cycle,
+    fig5_6_config: Fig56Config,
+    fig5_6: Fig56Result,
+    fig7_config: Fig7Config,
+    fig7: Fig7Result,
+    fig8_config: Fig8Config,
+    fig8: Fig8Result,
+    n_sweep_config: NSweepConfig,
+    n_sweep: NSweepResult,
+}
+
+fn scale(s: Scale) -> ex::Scale {
+    match s {
+        Scale::Quick => ex::Scale::Quick,
+        Scale::Default => ex::Scale::Default,
+        Scale::Full => ex::Scale::Full,
+    }
+}
+
+const PAPER: &str = "dredge";
+
+fn series(name: &str, x: &[f64], y: impl IntoIterator<Item = f64>) -> Series {
+    Series {
+        name: name.into(),
+        x: x.to_vec(),
+        y: y.into_iter().collect(),
+        band: None,
+    }
+}
+
+/// The defined points of a series with gaps.
+fn defined(name: &str, x: &[f64], y: &[Option<f64>], factor: f64) -> Series {
+    let (x, y): (Vec<f64>, Vec<f64>) = x
+        .iter()
+        .zip(y)
+        .filter_map(|(&x, y)| y.map(|y| (x, y * factor)))
+        .unzip();
+    Series {
+        name: name.into(),
+        x,
+        y,
+        band: None,
+    }
+}
+
+/// A vertical marker line as a two-point series.
+fn vline(name: &str, x: f64, (lo, hi): (f64, f64)) -> Series {
+    series(name, &[x, x], [lo, hi])
+}
+
+fn plot(title: &str, y_label: &str, series: Vec<Series>, legend: LegendPos) -> LinePlot {
+    LinePlot {
+        title: title.into(),
+        x_label: "time t (s)".into(),
+        y_label: y_label.into(),
+        series,
+        ref_lines: vec![],
+        y_range: None,
+        legend,
+    }
+}
+
+fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
+    let sc = scale(ctx.scale);
+    let err = VizError::paper(PAPER);
+    let seed = ctx.seed;
+    let bar = ctx.progress.bar("dredge", 5);
+
+    let cycle_config = CycleConfig {
+        seed,
+        ..CycleConfig::default()
+    };
+    let c = ex::cycle(&cycle_config).map_err(err)?;
+    bar.inc(1);
+    let fig5_6_config = Fig56Config {
+        seed,
+        ..Fig56Config::at_scale(sc)
+    };
+    let f56 = ex::fig5_6(&fig5_6_config).map_err(err)?;
+    bar.inc(1);
+    let fig7_config = Fig7Config {
+        seed,
+        ..Fig7Config::at_scale(sc)
+    };
+    let f7 = ex::fig7(&fig7_config).map_err(err)?;
+    bar.inc(1);
+    let fig8_config = Fig8Config {
+        seed,
+        ..Fig8Config::at_scale(sc)
+    };
+    let f8 = ex::fig8(&fig8_config).map_err(err)?;
+    bar.inc(1);
+    let n_sweep_config = NSweepConfig {
+        seed,
+        ..NSweepConfig::at_scale(sc)
+    };
+    let ns = ex::n_sweep(&n_sweep_config).map_err(err)?;
+    bar.inc(1);
+    bar.finish_and_clear();
+
+    let mut figures = Vec::new();
+    let mut fig = |file: &str, caption: String| {
+        figures.push(Figure {
+            file: file.into(),
+            caption,
+        })
+    };
+
+    // Fig. 3: inputs.
+    line::render(
+        &ctx.path("dredge-fig3-inputs.png"),
+        &plot(
+            "Fig. 3: incoming mixture",
+            "ρ_i (kg/m³); Q_i × 100 (m³/s)",
+            vec![
+                series("ρ_i (kg/m³)", &c.t, c.rho_i.iter().copied()),
+                series("Q_i × 100 (m³/s)", &c.t, c.q_i.iter().map(|q| q * 100.0)),
+            ],
+            LegendPos::LowerRight,
+        ),
+    )?;
+    fig(
+        "dredge-fig3-inputs.png",
+        "Fig. 3. Paper: flow-rate and density of the incoming mixture of one real cycle. Ours: \
+         the simulator's inputs (Q_i scaled by 100 to share the axis): the dredge pump's flow \
+         and the mixture density, the measured disturbance."
+            .into(),
+    );
+
+    // Fig. 4: loading phases.
+    let m_kt: Vec<f64> = c.m_t.iter().map(|m| m / 1e3).collect();
+    let hi = c
+        .v_t
+        .iter()
+        .chain(&m_kt)
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    let mut s4 = vec![
+        series("m_t (t)", &c.t, m_kt.iter().copied()),
+        series("V_t (m³)", &c.t, c.v_t.iter().copied()),
+        series("h_o × 1000 (m)", &c.t, c.h_o.iter().map(|h| h * 1000.0)),
+    ];
+    for (name, k) in [
+        ("phase 2 starts", c.phase2_start),
+        ("phase 3 starts", c.phase3_start),
+    ] {
+        if let Some(k) = k {
+            s4.push(vline(name, c.t[k], (0.0, hi)));
+        }
+    }
+    line::render(
+        &ctx.path("dredge-fig4-phases.png"),
+        &plot(
+            "Fig. 4: loading phases",
+            "m_t (t); V_t (m³); h_o × 1000 (m)",
+            s4,
+            LegendPos::LowerRight,
+        ),
+    )?;
+    fig(
+        "dredge-fig4-phases.png",
+        "Fig. 4. Paper: hopper mass and volume of a real cycle as the overflow height is \
+         manipulated, phase transitions dashed. Ours: the simulated cycle (true m_t, V_t, and \
+         h_o); phase 1 fills without overflow, in phase 2 V_t is constant (Q_o ≈ Q_i) while m_t \
+         still rises, in phase 3 the PID on h_o holds m_t at m_max while V_t falls."
+            .into(),
+    );
+
+    // Fig. 5: estimates in phase 3.
+    line::render(
+        &ctx.path("dredge-fig5-estimates.png"),
+        &plot(
+            "Fig. 5: simulated and estimated overflow, phase 3",
+            "ρ_o (kg/m³); Q_o × 100 (m³/s)",
+            vec![
+                series("ρ_o simulated", &f56.t, f56.rho_o_true.iter().copied()),
+                series("ρ_o PF estimate", &f56.t, f56.rho_o_hat.iter().copied()),
+                series(
+                    "Q_o × 100 simulated",
+                    &f56.t,
+                    f56.q_o_true.iter().map(|q| q * 100.0),
+                ),
+                series(
+                    "Q_o × 100 PF estimate",
+                    &f56.t,
+                    f56.q_o_hat.iter().map(|q| q * 100.0),
+                ),
+            ],
+            LegendPos::UpperLeft,
+        ),
+    )?;
+    fig(
+        "dredge-fig5-estimates.png",
+        format!(
+            "Fig. 5. Paper: simulated (thin) and PF-estimated (thick) Q_o and ρ_o in phase 3. \
+             Ours: the same with N = {}, σ(ε_x) = [0, 3000, 0.2, 5], σ(ε_y) = [10, 12000]. \
+             ρ_o is tracked well while it is flat and lags by about 80 s on the fast rises \
+             and falls of our simulated ρ_o (see notes).",
+            fig5_6_config.filter.n_particles
+        ),
+    );
+
+    // Fig. 6: residual histograms.
+    let panel = |name: &str, unit: &str, h: &ex::Histogram, r: &ex::ResidualReport| HistPanel {
+        title: format!("{name} residual (simulated − estimated)"),
+        x_label: format!("{name} residual ({unit})"),
+        y_label: "samples".into(),
+        data: HistData::Binned {
+            edges: h.edges.clone(),
+            counts: h.counts.clone(),
+        },
+        stats: Some((
+            HistStats {
+                mean: r.ours.mean,
+                std: r.ours.std,
+                max_abs: r.ours.max_abs,
+            },
+            unit.into(),
+        )),
+    };
+    histogram::render(
+        &ctx.path("dredge-fig6-residuals.png"),
+        &HistogramPlot {
+            title: "Fig. 6: residual distributions, phase 3".into(),
+            panels: vec![
+                panel("Q_o", "m³/s", &f56.q_o_hist, &f56.q_o),
+                panel("ρ_o", "kg/m³", &f56.rho_o_hist, &f56.rho_o),
+            ],
+        },
+    )?;
+    fig(
+        "dredge-fig6-residuals.png",
+        format!(
+            "Fig. 6. Paper: residual histograms, Q_o mean −0.023, std 0.345 m³/s; ρ_o mean \
+             3.613, std 13.226 kg/m³. Ours: Q_o mean {:.3}, std {:.3} m³/s; ρ_o mean {:.2}, \
+             std {:.2} kg/m³ (table dredge-residuals puts them beside the paper's, relative to \
+             the signal ranges).",
+            f56.q_o.ours.mean, f56.q_o.ours.std, f56.rho_o.ours.mean, f56.rho_o.ours.std
+        ),
+    );
+
+    // Fig. 7: PF against direct computation.
+    let t7 = &f7.t;
+    line::render(
+        &ctx.path("dredge-fig7-direct.png"),
+        &plot(
+            "Fig. 7: PF against direct computation (15)–(16)",
+            "ρ_o (kg/m³); Q_o × 100 (m³/s)",
+            vec![
+                series("ρ_o PF", t7, f7.rho_o_pf.iter().copied()),
+                defined("ρ_o direct", t7, &f7.rho_o_direct, 1.0),
+                series("Q_o × 100 PF", t7, f7.q_o_pf.iter().map(|q| q * 100.0)),
+                defined("Q_o × 100 direct", t7, &f7.q_o_direct, 100.0),
+            ],
+            LegendPos::UpperLeft,
+        ),
+    )?;
+    fig(
+        "dredge-fig7-direct.png",
+        "Fig. 7. Paper: on real data, PF estimates (thick) against the direct computation \
+         (15)–(16) on zero-phase low-passed (0.001 Hz) V_t, m_t (thin). Ours: the same on the \
+         simulated cycle (we have no ship data); ρ̄_o is left out where Q̄_o < 0.5 m³/s. The \
+         direct computation is anti-causal, so it cannot run on line."
+            .into(),
+    );
+
+    // Fig. 8: 25-run band.
+    let t8 = &f8.t;
+    line::render(
+        &ctx.path("dredge-fig8-band.png"),
+        &plot(
+            "Fig. 8: spread of ρ_o estimates over independent runs",
+            "ρ_o (kg/m³)",
+            vec![
+                Series {
+                    name: format!("mean of {} runs, min–max", fig8_config.runs),
+                    x: t8.clone(),
+                    y: f8.rho_o.mean.clone(),
+                    band: Some(Band {
+                        lower: f8.rho_o.min.clone(),
+                        upper: f8.rho_o.max.clone(),
+                    }),
+                },
+                series("ρ_o simulated", t8, f8.rho_o_true.iter().copied()),
+            ],
+            LegendPos::UpperLeft,
+        ),
+    )?;
+    fig(
+        "dredge-fig8-band.png",
+        format!(
+            "Fig. 8. Paper: grey band = min–max of ρ_o estimates over 25 independent PF runs on \
+             the same real data, bold = their mean. Ours: {} runs with N = {} on one simulated \
+             cycle; mean band width in phase 3: {:.1} kg/m³.",
+            fig8_config.runs, fig8_config.filter.n_particles, f8.mean_rho_o_width_phase3
+        ),
+    );
+
+    // N sweep.
+    let n: Vec<f64> = ns.rows.iter().map(|r| r.n as f64).collect();
+    let band = |m: &dyn Fn(&ex::NSweepRow) -> (f64, f64), k: f64| Band {
+        lower: ns
+            .rows
+            .iter()
+            .map(|r| (m(r).0 - 2.0 * m(r).1) * k)
+            .collect(),
+        upper: ns
+            .rows
+            .iter()
+            .map(|r| (m(r).0 + 2.0 * m(r).1) * k)
+            .collect(),
+    };
+    let mut sweep = plot(
+        "Residual std against the number of particles N",
+        "ρ_o std (kg/m³); Q_o std × 10 (m³/s)",
+        vec![
+            Series {
+                name: "ρ_o residual std, ± 2 s.e.".into(),
+                x: n.clone(),
+                y: ns.rows.iter().map(|r| r.rho_o_std).collect(),
+                band: Some(band(&|r| (r.rho_o_std, r.rho_o_std_se), 1.0)),
+            },
+            Series {
+                name: "Q_o residual std × 10, ± 2 s.e.".into(),
+                x: n.clone(),
+                y: ns.rows.iter().map(|r| r.q_o_std * 10.0).collect(),
+                band: Some(band(&|r| (r.q_o_std, r.q_o_std_se), 10.0)),
+            },
+        ],
+        LegendPos::UpperRight,
+    );
+    sweep.x_label = "particles N".into();
+    sweep.y_range = Some((
+        0.0,
+        ns.rows.iter().map(|r| r.rho_o_std).fold(0.0, f64::max) * 1.6,
+    ));
+    line::render(&ctx.path("dredge-n-sweep.png"), &sweep)?;
+    fig(
+        "dredge-n-sweep.png",
+        format!(
+            "Beyond the paper: phase-3 residual std against N ({} replications per N, band ± 2 \
+             standard errors), to choose N for the on-board time budget.",
+            n_sweep_config.reps
+        ),
+    );
+
+    // Residual table.
+    let q = &f56.q_o;
+    let r = &f56.rho_o;
+    let d = &f7.direct_residuals;
+    let dstd = |s: Option<pf_core::metrics::ResidualSummary>| {
+        s.map_or("–".to_owned(), |s| format!("{:.3}", s.std))
+    };
+    let row = |name: &str, x: &ex::ResidualReport, direct: String| {
+        vec![
+            name.to_owned(),
+            format!("{}", x.paper.mean),
+            format!("{}", x.paper.std),
+            format!("≈ {}", x.paper.max_abs_about),
+            format!("≈ {}", x.paper.nominal_range),
+            format!("{:.1} %", 100.0 * x.paper.std / x.paper.nominal_range),
+            format!("{:.3}", x.ours.mean),
+            format!("{:.3}", x.ours.std),
+            format!("{:.3}", x.ours.max_abs),
+            format!("{:.3}", x.signal_range),
+            format!("{:.1} %", 100.0 * x.relative_std),
+            direct,
+        ]
+    };
+    let tables = vec![Table {
+        id: "residuals".into(),
+        caption: "Phase-3 residuals (simulated − PF estimate), the paper's (Section V-B, Fig. 6) \
+                  beside ours; ranges are the signal ranges (paper: its \"nominal\" range, from \
+                  max |·| ≈ 10 % of it), std / range makes the two comparable. Last column: the \
+                  direct computation's residual std over the whole overflow period."
+            .into(),
+        header: [
+            "signal",
+            "paper mean",
+            "paper std",
+            "paper max |·|",
+            "paper range",
+            "paper std/range",
+            "our mean",
+            "our std",
+            "our max |·|",
+            "our range",
+            "our std/range",
+            "direct std",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: vec![
+            row("Q_o (m³/s)", q, dstd(d.q_o)),
+            row("ρ_o (kg/m³)", r, dstd(d.rho_o)),
+        ],
+    }];
+
+    let notes = vec![
+        format!(
+            "Q_o: our residual std {:.3} m³/s against the paper's 0.345; a linearised Kalman \
+             filter with the paper's noise levels (σ(ε_x) = [0, 3000, 0.2, 5], σ(ε_y) = [10, \
+             12000], T_s = 5 s, Q_o ≈ 9 m³/s, ρ_o ≈ 1200 kg/m³) has a steady-state posterior std \
+             of 0.40 m³/s for Q_o, so both are at what these noise levels allow.",
+            q.ours.std
+        ),
+        format!(
+            "ρ_o: our residual std {:.1} kg/m³ is about {:.1}× the paper's 13.2 ({:.1} % of our \
+             range {:.0} kg/m³ against about 3.3 % of the paper's ≈ 400). Found out, not \
+             guessed: (1) not Monte Carlo error: N = 10 000 or the mean of 16 runs change it by \
+             under 5 %; (2) not the noise: while our simulated ρ_o is flat (at ρ_w, first half \
+             of phase 3) the residual std is 5–9 kg/m³, matching the 7.2 kg/m³ that the \
+             measurement noise alone leaves in the linearised filter; (3) it is our \
+             simulator's ρ_o: when the sand bed reaches the overflow the linear profile (6) \
+             makes ρ_o rise by ~200 kg/m³ in ~150 s, and the PID moving h_o through the steep \
+             profile swings it by ±100 kg/m³ within minutes. The random walk σ(ε_x4) = 5 kg/m³ \
+             per 5 s gives the filter an ~85 s lag (a 0.5 kg/m³-per-step ramp alone costs a \
+             ~9 kg/m³ bias, hence our positive mean); these transients make the excess. The \
+             paper's own tuning has a steady-state ρ_o posterior std of 21 kg/m³ in the \
+             linearised filter, so its 13.2 implies a smoother simulated ρ_o than ours.",
+            r.ours.std,
+            r.ours.std / 13.226,
+            100.0 * r.relative_std,
+            r.signal_range
+        ),
+        "Values the paper leaves unstated, chosen physically plausible (crate README lists them \
+         with units): hopper area A, k_o, k'_o, k_c, v_s, β, ρ_q, ρ_s, ρ_w, the inflow \
+         profiles, PID gains, m_max; the prior p(x_0) (centred on the first measurement); the \
+         direct computation's threshold Q̄_o ≥ 0.5 m³/s below which (16) is not divided."
+            .into(),
+        "Figs. 3, 5 and 7 draw two signals of different units on one axis, Q scaled by 100; the \
+         paper's Fig. 7 and 8 are on real ship data, which we do not have: ours are on the \
+         simulated cycle."
+            .into(),
+    ];
+
+    let mut files = Vec::new();
+    if ctx.write_rrd() {
+        #[cfg(feature = "rrd")]
+        {
+            crate::rrd::dredge::save(&ctx.path("dredge.rrd"), &c, &fig5_6_config.filter, seed)?;
+            files.push("dredge.rrd".to_owned());
+        }
+    }
+
+    let result = to_json(
+        ctx,
+        &DredgeResult {
+            seed,
+            cycle_config,
+            cycle: c,
+            fig5_6_config,
+            fig5_6: f56,
+            fig7_config,
+            fig7: f7,
+            fig8_config,
+            fig8: f8,
+            n_sweep_config,
+            n_sweep: ns,
+        },
+    )?;
+    Ok(SectionReport {
+        result,
+        figures,
+        tables,
+        notes,
+        files,
+    })
 }
