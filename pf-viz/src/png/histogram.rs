@@ -213,7 +213,7 @@ fn draw_panel(
             format!("max |·| {} {unit}", short(s.max_abs)),
         ];
         let (w, _) = area.dim_in_pixel();
-        let x = (w as i32 - 330).max(style::Y_LABEL_AREA_PX as i32 + 10);
+        let x = (w as i32 - 285).max(style::Y_LABEL_AREA_PX as i32 + 10);
         for (i, l) in lines.iter().enumerate() {
             area.draw(&Text::new(
                 l.clone(),
