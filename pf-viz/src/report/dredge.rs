@@ -436,7 +436,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         caption: "Phase-3 residuals (simulated − PF estimate), the paper's (Section V-B, Fig. 6) \
                   beside ours; ranges are the signal ranges (paper: its \"nominal\" range, from \
                   max |·| ≈ 10 % of it), std / range makes the two comparable. Last column: the \
-                  direct computation's residual std over the whole overflow period."
+                  direct computation's (15)–(16) residual std in phase 3, where defined."
             .into(),
         header: [
             "signal",

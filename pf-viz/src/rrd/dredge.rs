@@ -85,12 +85,12 @@ fn log(
         series(rec, path, e, n, c)?;
     }
     // Axis ticks of the cloud plane.
-    let q_ticks: Vec<f64> = (0..=6).map(|j| 2.0 * j as f64).collect();
+    let q_ticks: Vec<f64> = (0..=3).map(|j| 4.0 * j as f64).collect();
     let rho_ticks: Vec<f64> = (0..=6).map(|j| 1000.0 + 100.0 * j as f64).collect();
     rec.log_static(
         format!("{ROOT}/cloud/axes/q"),
         &Points2D::new(q_ticks.iter().map(|&q| at(q, 980.0)))
-            .with_labels(q_ticks.iter().map(|q| format!("Q_o = {q} m³/s")))
+            .with_labels(q_ticks.iter().map(|q| format!("Q_o {q}")))
             .with_colors([GREY])
             .with_radii([Radius::new_ui_points(2.0)])
             .with_show_labels(true),
@@ -99,7 +99,7 @@ fn log(
     rec.log_static(
         format!("{ROOT}/cloud/axes/rho"),
         &Points2D::new(rho_ticks.iter().map(|&r| at(-0.3, r)))
-            .with_labels(rho_ticks.iter().map(|r| format!("ρ_o = {r} kg/m³")))
+            .with_labels(rho_ticks.iter().map(|r| format!("ρ_o {r}")))
             .with_colors([GREY])
             .with_radii([Radius::new_ui_points(2.0)])
             .with_show_labels(true),
