@@ -203,13 +203,13 @@ impl<R: BufRead> CsvSamples<R> {
             *slot = Some(x);
         }
         let t = v[0].ok_or_else(|| csv_err(line, "t is empty: every sample needs its time"))?;
-        if let Some(prev) = self.prev_t {
-            if t <= prev {
-                return Err(csv_err(
-                    line,
-                    format!("time does not increase: t = {t} after t = {prev}"),
-                ));
-            }
+        if let Some(prev) = self.prev_t
+            && t <= prev
+        {
+            return Err(csv_err(
+                line,
+                format!("time does not increase: t = {t} after t = {prev}"),
+            ));
         }
         if self.rows == 0 {
             for (name, x) in REQUIRED.iter().zip(&v).skip(1) {
