@@ -38,7 +38,7 @@ impl NSweepConfig {
     pub fn at_scale(scale: Scale) -> Self {
         let (n_particles, reps) = match scale {
             Scale::Quick => (vec![100, 300], 2),
-            Scale::Default => (vec![100, 300, 1000, 3000], 4),
+            Scale::Default => (vec![100, 300, 1000, 3000, 10_000], 4),
             Scale::Full => (vec![100, 300, 1000, 3000, 10_000], 10),
         };
         NSweepConfig {

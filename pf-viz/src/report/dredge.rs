@@ -361,7 +361,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     );
 
     // N sweep.
-    let n: Vec<f64> = ns.rows.iter().map(|r| r.n as f64).collect();
+    let n: Vec<f64> = ns.rows.iter().map(|r| (r.n as f64).log10()).collect();
     let band = |m: &dyn Fn(&ex::NSweepRow) -> (f64, f64), k: f64| Band {
         lower: ns
             .rows
@@ -393,7 +393,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         ],
         LegendPos::UpperRight,
     );
-    sweep.x_label = "particles N".into();
+    sweep.x_label = "log₁₀ N (N = number of particles)".into();
     sweep.y_range = Some((
         0.0,
         ns.rows.iter().map(|r| r.rho_o_std).fold(0.0, f64::max) * 1.6,
@@ -403,7 +403,9 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         "dredge-n-sweep.png",
         format!(
             "Beyond the paper: phase-3 residual std against N ({} replications per N, band ± 2 \
-             standard errors), to choose N for the on-board time budget.",
+             standard errors), to choose N for the on-board time budget. Below a few hundred \
+             particles some runs lose the track of ρ_o (wide band at N = 100); above 1000 the \
+             std barely falls: the residual is set by the model and the noise, not by N.",
             n_sweep_config.reps
         ),
     );
