@@ -114,7 +114,9 @@ fn log(
         let est = online
             .push(&data.sample(k), &mut rng)
             .map_err(VizError::paper("dredge"))?;
-        rec.set_duration_secs(TIME, cycle.t[k]);
+        // Whole seconds as a sequence: the viewer then opens the series on the whole cycle
+        // (a duration timeline opens them on the last minute).
+        rec.set_time_sequence(TIME, cycle.t[k].round() as i64);
         let scalars = [
             ("volume/measured", cycle.y_v[k]),
             ("volume/true", cycle.v_t[k]),
