@@ -89,11 +89,6 @@ fn stride(n: usize) -> usize {
     (n / 60).max(1)
 }
 
-/// A vertical marker line as a two-point series.
-fn vline(name: &str, x: f64, (lo, hi): (f64, f64)) -> Series {
-    series(name, &[x, x], [lo, hi])
-}
-
 fn plot(title: &str, y_label: &str, series: Vec<Series>, legend: LegendPos) -> LinePlot {
     LinePlot {
         title: title.into(),
@@ -189,13 +184,15 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             stride(c.len()),
         ),
     ];
-    for (name, k) in [
-        ("phase 2 starts", c.phase2_start),
-        ("phase 3 starts", c.phase3_start),
-    ] {
-        if let Some(k) = k {
-            s4.push(vline(name, c.t[k], (0.0, hi)));
-        }
+    // Phase 2 as one dotted bracket (up at its start, across, down at its end): a fifth
+    // series would reuse the first series' look.
+    if let (Some(k2), Some(k3)) = (c.phase2_start, c.phase3_start) {
+        let (a, b) = (c.t[k2], c.t[k3]);
+        s4.push(series(
+            "phase 2 (inside the dotted bracket)",
+            &[a, a, b, b],
+            [0.0, hi, hi, 0.0],
+        ));
     }
     line::render(
         &ctx.path("dredge-fig4-phases.png"),
@@ -209,7 +206,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     fig(
         "dredge-fig4-phases.png",
         "Fig. 4. Paper: hopper mass and volume of a real cycle as the overflow height is \
-         manipulated, phase transitions dashed. Ours: the simulated cycle (true m_t, V_t, and \
+         manipulated, phase transitions dashed. Ours (phase 2 bracketed): the simulated cycle (true m_t, V_t, and \
          h_o); phase 1 fills without overflow, in phase 2 V_t is constant (Q_o ≈ Q_i) while m_t \
          still rises, in phase 3 the PID on h_o holds m_t at m_max while V_t falls."
             .into(),
