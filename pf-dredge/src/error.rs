@@ -87,6 +87,20 @@ pub enum DredgeError {
         /// What the engine reported.
         source: CoreError,
     },
+    /// A line of a CSV data file is malformed (see [`crate::logfile`]).
+    #[error("line {line}: {message}")]
+    Csv {
+        /// 1-based line number, the header being line 1.
+        line: u64,
+        /// What is wrong.
+        message: String,
+    },
+    /// Writing data failed.
+    #[error("cannot write: {message}")]
+    Io {
+        /// What the writer said.
+        message: String,
+    },
     /// The simulated cycle did not reach the phase an experiment needs.
     #[error("the simulated cycle never reached phase {phase}; lengthen t_end or change the inputs")]
     PhaseNotReached {

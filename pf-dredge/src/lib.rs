@@ -17,7 +17,7 @@
 //! | Section IV, Algs. 1–2: particle filter, off-line and on-line | [`estimator`] |
 //! | Section V-A, eqs. (15)–(16): direct computation with zero-phase low-pass | [`direct`] |
 //! | Section V, Figs. 3–8, and an `N` sweep | [`experiments`] |
-//! | logged data (the CLI's CSV columns) | [`data`] |
+//! | logged data (the CLI's CSV columns) | [`data`], [`logfile`] (CSV read/write, streaming) |
 //!
 //! ```
 //! use pf_dredge::estimator::{EstimatorConfig, OnlineEstimator};
@@ -41,6 +41,7 @@ pub mod direct;
 pub mod error;
 pub mod estimator;
 pub mod experiments;
+pub mod logfile;
 pub mod model;
 pub mod sedimentation;
 pub mod simulator;

@@ -1,129 +1,217 @@
-//! `pf-viz dredge …` end to end: simulate → estimate, on-line against file mode, and the
-//! one-line errors for bad data.
+//! End-to-end checks of `pf-viz dredge simulate|estimate`: the JSON contract, the on-line
+//! mode against the file mode, and one error per bad input of the issue.
 
-use std::io::Write;
+use std::fs;
+use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
+use serde_json::Value;
+
 const BIN: &str = env!("CARGO_BIN_EXE_pf-viz");
 
-fn pf_viz(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().expect("run pf-viz")
-}
-
+/// A fresh scratch directory, removed on drop.
 struct Scratch(PathBuf);
 
 impl Scratch {
     fn new(tag: &str) -> Self {
-        let d = std::env::temp_dir().join(format!("pf-viz-dredge-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        Scratch(d)
+        let dir = std::env::temp_dir().join(format!("pf-viz-dredge-{tag}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
     }
     fn file(&self, name: &str, text: &str) -> PathBuf {
         let p = self.0.join(name);
-        std::fs::write(&p, text).unwrap();
+        fs::write(&p, text).unwrap();
         p
     }
 }
 
 impl Drop for Scratch {
     fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
+        let _ = fs::remove_dir_all(&self.0);
     }
 }
 
-/// A simulated cycle cut to its first `rows` samples.
-fn simulated(s: &Scratch, rows: usize) -> PathBuf {
-    let full = s.0.join("full.csv");
-    let o = pf_viz(&[
+fn pf_viz(args: &[&str]) -> Output {
+    Command::new(BIN).args(args).output().expect("run pf-viz")
+}
+
+fn pf_viz_stdin(args: &[&str], stdin: &[u8]) -> Output {
+    let mut child = Command::new(BIN)
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run pf-viz");
+    child.stdin.take().unwrap().write_all(stdin).unwrap();
+    child.wait_with_output().unwrap()
+}
+
+fn simulated(dir: &Scratch) -> PathBuf {
+    let csv = dir.0.join("cycle.csv");
+    let out = pf_viz(&[
         "dredge",
         "simulate",
         "--out",
-        full.to_str().unwrap(),
+        csv.to_str().unwrap(),
+        "--seed",
+        "3",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    csv
+}
+
+fn json(out: &Output) -> Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout.clone()).unwrap();
+    assert_eq!(text.lines().count(), 1, "--json prints exactly one line");
+    serde_json::from_str(&text).unwrap()
+}
+
+fn floats(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn simulate_then_estimate_keeps_the_json_contract() {
+    let dir = Scratch::new("roundtrip");
+    let csv = simulated(&dir);
+    let text = fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("t,V_t,m_t,Q_i,rho_i,Q_o,rho_o\n"));
+    let n = text.lines().count() - 1;
+    let v = json(&pf_viz(&[
+        "dredge",
+        "estimate",
+        "--data",
+        csv.to_str().unwrap(),
+        "--particles",
+        "300",
         "--seed",
         "4",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(o.stdout.is_empty(), "simulate prints nothing on stdout");
-    let text = std::fs::read_to_string(&full).unwrap();
-    let cut: Vec<&str> = text.lines().take(rows + 1).collect();
-    s.file("cut.csv", &(cut.join("\n") + "\n"))
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-#[test]
-fn simulate_then_estimate_keeps_the_contract() {
-    let s = Scratch::new("contract");
-    let data = simulated(&s, 400);
-    let header = std::fs::read_to_string(&data).unwrap();
-    assert!(header.starts_with("t,V_t,m_t,Q_i,rho_i,Q_o,rho_o\n"));
-    let o = pf_viz(&[
-        "dredge",
-        "estimate",
-        "--data",
-        path(&data),
-        "--particles",
-        "200",
-        "--runs",
-        "2",
         "--json",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let n = v["t"].as_array().unwrap().len();
-    assert_eq!(n, 400);
+    ]));
+    for key in ["t", "Q_o", "rho_o"] {
+        assert_eq!(v[key].as_array().unwrap().len(), n, "{key}");
+    }
+    assert_eq!(v["direct"]["Q_o"].as_array().unwrap().len(), n);
+    assert_eq!(v["direct"]["rho_o"].as_array().unwrap().len(), n);
+    let t = floats(&v["t"]);
+    assert!(
+        t.windows(2).all(|w| (w[1] - w[0] - 5.0).abs() < 1e-9),
+        "T_s = 5 s from t"
+    );
+    // Residuals are there (truth columns) and sane: the Q_o residual std is well under the
+    // Q_o range (0 to about 8 m³/s); the paper's is 0.345 m³/s.
     for key in ["Q_o", "rho_o"] {
-        let xs = v[key].as_array().unwrap();
-        assert_eq!(xs.len(), n);
-        assert!(xs.iter().all(|x| x.as_f64().unwrap().is_finite()));
-        assert_eq!(v["direct"][key].as_array().unwrap().len(), n);
+        let r = &v["residuals"][key];
         for stat in ["mean", "std", "max_abs"] {
-            assert!(v["residuals"][key][stat].as_f64().unwrap().is_finite());
+            assert!(r[stat].as_f64().unwrap().is_finite(), "{key}.{stat}");
         }
     }
-    // Without truth columns there are no residuals.
-    let text = std::fs::read_to_string(&data).unwrap();
+    assert!(v["residuals"]["Q_o"]["std"].as_f64().unwrap() < 1.0);
+
+    // Without the truth columns there is no `residuals` key.
     let no_truth: String = text
         .lines()
-        .map(|l| l.split(',').take(5).collect::<Vec<_>>().join(","))
-        .collect::<Vec<_>>()
-        .join("\n");
-    let bare = s.file("bare.csv", &no_truth);
-    let o = pf_viz(&[
+        .map(|l| l.split(',').take(5).collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    let p = dir.file("no_truth.csv", &no_truth);
+    let v2 = json(&pf_viz(&[
         "dredge",
         "estimate",
         "--data",
-        path(&bare),
+        p.to_str().unwrap(),
         "--particles",
-        "100",
+        "300",
+        "--seed",
+        "4",
         "--json",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert!(v.get("residuals").is_none());
+    ]));
+    assert!(v2.get("residuals").is_none());
+    assert_eq!(
+        v2["Q_o"], v["Q_o"],
+        "truth columns do not change the estimate"
+    );
+}
+
+/// The first `rows` data rows of the simulated cycle, with some cells emptied (missing
+/// observations) to exercise that path in both modes.
+fn with_gaps(csv: &Path, rows: usize) -> String {
+    let text = fs::read_to_string(csv).unwrap();
+    let mut out = String::new();
+    for (i, line) in text.lines().take(rows + 1).enumerate() {
+        let mut f: Vec<&str> = line.split(',').collect();
+        if i > 0 && i % 7 == 0 {
+            f[1] = "";
+        }
+        if i > 0 && i % 11 == 0 {
+            f[2] = "";
+            f[3] = "";
+        }
+        out += &f.join(",");
+        out.push('\n');
+    }
+    out
 }
 
 #[test]
-fn online_mode_streams_the_file_modes_estimates() {
-    let s = Scratch::new("online");
-    let data = simulated(&s, 60);
-    let o = pf_viz(&[
+fn online_gives_the_file_mode_estimates_for_the_same_seed() {
+    let dir = Scratch::new("online");
+    let csv = simulated(&dir);
+    let text = with_gaps(&csv, 500);
+    let p = dir.file("gaps.csv", &text);
+    let args = ["--particles", "200", "--seed", "9", "--runs", "2"];
+    let mut file_args = vec![
         "dredge",
         "estimate",
         "--data",
-        path(&data),
-        "--particles",
-        "150",
-        "--seed",
-        "9",
+        p.to_str().unwrap(),
         "--json",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let file: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    ];
+    file_args.extend(args);
+    let file = json(&pf_viz(&file_args));
+    let mut online_args = vec!["dredge", "estimate", "--data", "-", "--online"];
+    online_args.extend(args);
+    let out = pf_viz_stdin(&online_args, text.as_bytes());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 500, "one line per input sample");
+    let (q, rho, t) = (
+        floats(&file["Q_o"]),
+        floats(&file["rho_o"]),
+        floats(&file["t"]),
+    );
+    for (k, l) in lines.iter().enumerate() {
+        assert_eq!(l["t"].as_f64().unwrap(), t[k]);
+        assert_eq!(l["Q_o"].as_f64().unwrap(), q[k], "Q_o at sample {k}");
+        assert_eq!(l["rho_o"].as_f64().unwrap(), rho[k], "rho_o at sample {k}");
+    }
+}
+
+#[test]
+fn online_answers_each_sample_before_the_next_arrives() {
     let mut child = Command::new(BIN)
         .args([
             "dredge",
@@ -132,121 +220,118 @@ fn online_mode_streams_the_file_modes_estimates() {
             "-",
             "--online",
             "--particles",
-            "150",
-            "--seed",
-            "9",
+            "50",
         ])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(std::fs::read(&data).unwrap().as_slice())
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let lines: Vec<serde_json::Value> = String::from_utf8(out.stdout)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
-    assert_eq!(lines.len(), 60, "one line per sample");
-    for (k, l) in lines.iter().enumerate() {
-        assert_eq!(l["t"], file["t"][k]);
-        assert_eq!(l["Q_o"], file["Q_o"][k], "Q_o at sample {k}");
-        assert_eq!(l["rho_o"], file["rho_o"][k], "rho_o at sample {k}");
+    let mut stdin = child.stdin.take().unwrap();
+    let mut stdout = BufReader::new(child.stdout.take().unwrap());
+    writeln!(stdin, "t,V_t,m_t,Q_i,rho_i").unwrap();
+    let mut line = String::new();
+    for k in 0..3 {
+        // The pipe stays open: the answer can only come if it is flushed per sample.
+        writeln!(stdin, "{},{},1.0e6,8,1200", 5 * k, 1000 + 40 * k).unwrap();
+        stdin.flush().unwrap();
+        line.clear();
+        stdout.read_line(&mut line).unwrap();
+        let v: Value = serde_json::from_str(&line).unwrap();
+        assert_eq!(v["t"].as_f64().unwrap(), (5 * k) as f64);
+    }
+    drop(stdin);
+    assert!(child.wait().unwrap().success());
+}
+
+/// Runs `estimate` on `text`, expects exit 1 and one stderr line with every `needles`.
+fn rejects(dir: &Scratch, name: &str, text: &str, needles: &[&str]) {
+    let p = dir.file(name, text);
+    for online in [false, true] {
+        let out = if online {
+            pf_viz_stdin(
+                &[
+                    "dredge",
+                    "estimate",
+                    "--data",
+                    "-",
+                    "--online",
+                    "--particles",
+                    "50",
+                ],
+                text.as_bytes(),
+            )
+        } else {
+            pf_viz(&[
+                "dredge",
+                "estimate",
+                "--data",
+                p.to_str().unwrap(),
+                "--particles",
+                "50",
+                "--json",
+            ])
+        };
+        assert_eq!(out.status.code(), Some(1), "{name} (online {online})");
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(err.lines().count(), 1, "{name}: one line, got {err}");
+        assert!(err.starts_with("error: "), "{err}");
+        for n in needles {
+            assert!(
+                err.contains(n),
+                "{name} (online {online}): `{n}` not in {err}"
+            );
+        }
+        if !online {
+            assert!(out.stdout.is_empty(), "{name}: nothing on stdout");
+        }
     }
 }
 
 #[test]
-fn empty_cells_are_missing_observations() {
-    let s = Scratch::new("missing");
-    let data = s.file(
-        "gap.csv",
-        "t,V_t,m_t,Q_i,rho_i\n0,1000,1020000,8,1025\n5,,,8,1025\n10,1080,1102000,,\n15,1120,1143000,8,1030\n",
+fn each_bad_input_gets_a_one_line_error_naming_line_and_problem() {
+    let dir = Scratch::new("errors");
+    let h = "t,V_t,m_t,Q_i,rho_i\n";
+    let ok = "0,1000,1.0e6,8,1200\n5,1040,1.05e6,8,1200\n";
+    rejects(&dir, "empty.csv", "", &["line 1", "empty"]);
+    rejects(&dir, "header_only.csv", h, &["line 2", "no data rows"]);
+    rejects(
+        &dir,
+        "missing.csv",
+        "t,V_t,Q_i,rho_i\n0,1000,8,1200\n",
+        &["line 1", "missing column(s) m_t"],
     );
-    let o = pf_viz(&[
-        "dredge",
-        "estimate",
-        "--data",
-        path(&data),
-        "--particles",
-        "100",
-        "--json",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(v["Q_o"].as_array().unwrap().len(), 4);
-}
-
-#[test]
-fn bad_data_gets_one_line_naming_the_problem() {
-    let s = Scratch::new("bad");
-    let good = "t,V_t,m_t,Q_i,rho_i\n0,1000,1020000,8,1025\n5,1040,1061000,8,1025\n";
-    let cases = [
-        (
-            "missing-column.csv",
-            "t,V_t,m_t,Q_i\n0,1,2,3\n5,1,2,3\n",
-            "rho_i",
-        ),
-        (
-            "not-a-number.csv",
-            "t,V_t,m_t,Q_i,rho_i\n0,1000,1020000,8,1025\n5,lots,1061000,8,1025\n",
-            "line 3",
-        ),
-        (
-            "backwards.csv",
-            "t,V_t,m_t,Q_i,rho_i\n0,1000,1020000,8,1025\n5,1040,1061000,8,1025\n5,1041,1062000,8,1025\n",
-            "line 4",
-        ),
-        (
-            "negative.csv",
-            "t,V_t,m_t,Q_i,rho_i\n0,1000,1020000,8,1025\n5,1040,1061000,-8,1025\n",
-            "negative",
-        ),
-        ("empty.csv", "t,V_t,m_t,Q_i,rho_i\n", "no samples"),
-    ];
-    for (name, text, needle) in cases {
-        let p = s.file(name, text);
-        let o = pf_viz(&[
-            "dredge",
-            "estimate",
-            "--data",
-            path(&p),
-            "--particles",
-            "50",
-            "--json",
-        ]);
-        assert_eq!(o.status.code(), Some(1), "{name} should fail");
-        assert!(o.stdout.is_empty(), "{name}: nothing on stdout");
-        let stderr = String::from_utf8(o.stderr).unwrap();
-        assert_eq!(stderr.lines().count(), 1, "{name}: {stderr:?}");
-        assert!(stderr.contains(name), "{name}: names the file: {stderr:?}");
-        assert!(stderr.contains(needle), "{name}: {stderr:?}");
-    }
-    let good = s.file("good.csv", good);
-    for args in [
-        &[
-            "dredge",
-            "estimate",
-            "--data",
-            path(&good),
-            "--particles",
-            "0",
-        ][..],
-        &["dredge", "estimate", "--data", path(&good), "--runs", "0"][..],
-        &["dredge", "estimate", "--data", "/nonexistent/x.csv"][..],
-    ] {
-        let o = pf_viz(args);
-        assert!(!o.status.success(), "{args:?}");
-        assert_eq!(String::from_utf8_lossy(&o.stderr).lines().count(), 1);
-    }
+    rejects(
+        &dir,
+        "text.csv",
+        &format!("{h}{ok}10,1080,heavy,8,1200\n"),
+        &["line 4", "m_t = `heavy` is not a number"],
+    );
+    rejects(
+        &dir,
+        "time.csv",
+        &format!("{h}{ok}5,1080,1.1e6,8,1200\n"),
+        &["line 4", "time does not increase"],
+    );
+    rejects(
+        &dir,
+        "neg_flow.csv",
+        &format!("{h}{ok}10,1080,1.1e6,-8,1200\n"),
+        &["line 4", "Q_i = -8 is negative"],
+    );
+    rejects(
+        &dir,
+        "neg_density.csv",
+        &format!("{h}{ok}10,1080,1.1e6,8,-1200\n"),
+        &["line 4", "rho_i = -1200 is negative"],
+    );
+    rejects(
+        &dir,
+        "neg_truth.csv",
+        "t,V_t,m_t,Q_i,rho_i,Q_o,rho_o\n0,1000,1.0e6,8,1200,1,-5\n",
+        &["line 2", "rho_o = -5 is negative"],
+    );
+    let missing = pf_viz(&["dredge", "estimate", "--data", "/nonexistent/x.csv"]);
+    assert_eq!(missing.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("/nonexistent/x.csv"));
 }

@@ -33,12 +33,12 @@ impl Default for NSweepConfig {
 }
 
 impl NSweepConfig {
-    /// Presets: `Quick` N ∈ {100, 300}, 2 runs; `Default` N ∈ {100, 300, 1000, 3000}, 4 runs;
+    /// Presets: `Quick` N ∈ {100, 300}, 2 runs; `Default` N ∈ {100, 300, 1000, 3000, 10000}, 4 runs;
     /// `Full` N ∈ {100, 300, 1000, 3000, 10000}, 10 runs.
     pub fn at_scale(scale: Scale) -> Self {
         let (n_particles, reps) = match scale {
             Scale::Quick => (vec![100, 300], 2),
-            Scale::Default => (vec![100, 300, 1000, 3000], 4),
+            Scale::Default => (vec![100, 300, 1000, 3000, 10_000], 4),
             Scale::Full => (vec![100, 300, 1000, 3000, 10_000], 10),
         };
         NSweepConfig {

@@ -1,154 +1,243 @@
-//! Histograms of pre-binned samples, with summary statistics written in the corner and
-//! labelled vertical reference lines (zero, a mean). The binning is the caller's: renderers
-//! compute no statistics.
+//! Histograms: one or more panels side by side, each from raw samples (binned here into equal
+//! bins over their range) or from pre-binned counts, with the caller's summary statistics
+//! (mean, std, max |·|) printed in the panel and the mean marked by a dashed line. The
+//! statistics are the caller's: the renderer only bins and draws.
 
 use std::path::Path;
 
-use plotters::element::DashedPathElement;
 use plotters::prelude::*;
-use plotters::style::text_anchor::{HPos, Pos, VPos};
+use serde::{Deserialize, Serialize};
 
-use super::render_png;
-use super::style::{self, AxisFonts, LegendPos, plot_err};
+use super::style::{self, plot_err};
+use super::{Canvas, render_png};
 use crate::error::{Result, VizError};
 
-/// A histogram: `counts[i]` samples in `[edges[i], edges[i+1])`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct HistogramPlot {
-    /// Figure title.
+/// What a panel shows.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum HistData {
+    /// Raw samples, binned into `bins` equal bins over `[min, max]`.
+    Samples {
+        /// The values.
+        values: Vec<f64>,
+        /// Number of bins (≥ 1).
+        bins: usize,
+    },
+    /// Counts already binned: `counts[j]` lies in `[edges[j], edges[j+1])`.
+    Binned {
+        /// Bin edges, increasing, one more than `counts`.
+        edges: Vec<f64>,
+        /// Counts per bin.
+        counts: Vec<usize>,
+    },
+}
+
+/// Summary statistics printed in a panel (computed by the caller).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct HistStats {
+    /// Mean (also drawn as a dashed vertical line).
+    pub mean: f64,
+    /// Standard deviation.
+    pub std: f64,
+    /// Largest absolute value.
+    pub max_abs: f64,
+}
+
+/// One histogram panel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HistPanel {
+    /// Panel title.
     pub title: String,
     /// x-axis description, with units.
     pub x_label: String,
-    /// Bin edges, increasing, one more than the counts.
-    pub edges: Vec<f64>,
-    /// Samples per bin.
-    pub counts: Vec<usize>,
-    /// Lines of text drawn in the upper right corner (mean, std, max |·|, the paper's).
-    pub annotation: Vec<String>,
-    /// Labelled vertical reference lines `(x, label)`.
-    pub ref_lines: Vec<(f64, String)>,
+    /// y-axis description (usually "count").
+    pub y_label: String,
+    /// The data.
+    pub data: HistData,
+    /// Statistics to print, with their unit (e.g. `"kg/m³"`).
+    pub stats: Option<(HistStats, String)>,
 }
 
-impl HistogramPlot {
-    /// Check the shape and finiteness.
-    ///
-    /// # Errors
-    /// [`VizError::PlotData`] naming what is wrong.
-    pub fn validate(&self) -> Result<()> {
-        let bad = |message: String| {
-            Err(VizError::PlotData {
-                what: "histogram",
-                message,
-            })
-        };
-        if self.counts.is_empty() || self.edges.len() != self.counts.len() + 1 {
-            return bad(format!(
-                "{:?}: {} edges for {} bins",
-                self.title,
-                self.edges.len(),
-                self.counts.len()
-            ));
-        }
-        if !self
-            .edges
-            .windows(2)
-            .all(|w| w[0].is_finite() && w[1] > w[0])
-        {
-            return bad(format!("{:?}: edges must increase", self.title));
-        }
-        if self.ref_lines.iter().any(|(x, _)| !x.is_finite()) {
-            return bad(format!("{:?}: non-finite reference line", self.title));
-        }
-        Ok(())
+/// A figure of histogram panels in one row.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HistogramPlot {
+    /// Figure title (above all panels).
+    pub title: String,
+    /// Panels, left to right.
+    pub panels: Vec<HistPanel>,
+}
+
+fn bad(message: String) -> VizError {
+    VizError::PlotData {
+        what: "histogram",
+        message,
     }
 }
 
-/// Render `plot` to the PNG `path`.
+/// Equal-width bins over `[min, max]` of `values` (one unit wide around a constant): the bin
+/// edges and counts. The maximum falls in the last bin.
 ///
 /// # Errors
-/// [`VizError::PlotData`] for inconsistent data; a plot or I/O error naming `path`.
+/// No values, a non-finite value, or `bins = 0`.
+pub fn bin(values: &[f64], bins: usize) -> Result<(Vec<f64>, Vec<usize>)> {
+    if values.is_empty() || bins == 0 {
+        return Err(bad(format!(
+            "{} value(s) into {bins} bin(s): need at least one of each",
+            values.len()
+        )));
+    }
+    if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+        return Err(bad(format!("non-finite value {v}")));
+    }
+    let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let (lo, hi) = if hi > lo {
+        (lo, hi)
+    } else {
+        (lo - 0.5, lo + 0.5)
+    };
+    let w = (hi - lo) / bins as f64;
+    let edges = (0..=bins).map(|i| lo + w * i as f64).collect();
+    let mut counts = vec![0; bins];
+    for &v in values {
+        counts[(((v - lo) / w) as usize).min(bins - 1)] += 1;
+    }
+    Ok((edges, counts))
+}
+
+impl HistPanel {
+    /// The panel's bins: edges and counts.
+    ///
+    /// # Errors
+    /// As [`bin`], or edges that are not one more than the counts, or not increasing.
+    pub fn bins(&self) -> Result<(Vec<f64>, Vec<usize>)> {
+        match &self.data {
+            HistData::Samples { values, bins } => bin(values, *bins),
+            HistData::Binned { edges, counts } => {
+                if counts.is_empty() || edges.len() != counts.len() + 1 {
+                    return Err(bad(format!(
+                        "{}: {} edges for {} counts",
+                        self.title,
+                        edges.len(),
+                        counts.len()
+                    )));
+                }
+                if !edges.windows(2).all(|w| w[0] < w[1] && w[1].is_finite()) {
+                    return Err(bad(format!("{}: edges not increasing", self.title)));
+                }
+                Ok((edges.clone(), counts.clone()))
+            }
+        }
+    }
+}
+
+/// Draw `plot` to `path`.
+///
+/// # Errors
+/// No panels, bad panel data ([`VizError::PlotData`]), or a drawing or I/O error.
 pub fn render(path: &Path, plot: &HistogramPlot) -> Result<()> {
-    plot.validate()?;
+    if plot.panels.is_empty() {
+        return Err(bad("no panels".into()));
+    }
+    let binned = plot
+        .panels
+        .iter()
+        .map(HistPanel::bins)
+        .collect::<Result<Vec<_>>>()?;
     render_png(path, |root| {
         let err = plot_err(path);
-        let lo = plot.edges[0].min(
-            plot.ref_lines
-                .iter()
-                .map(|r| r.0)
-                .fold(f64::INFINITY, f64::min),
-        );
-        let hi = plot.edges[plot.edges.len() - 1].max(
-            plot.ref_lines
-                .iter()
-                .map(|r| r.0)
-                .fold(f64::NEG_INFINITY, f64::max),
-        );
-        let (x_lo, x_hi) = style::padded(lo, hi, 0.03);
-        let top = plot.counts.iter().copied().max().unwrap_or(1).max(1) as f64 * 1.25;
-        let mut chart = ChartBuilder::on(root)
-            .caption(&plot.title, style::title())
-            .margin(style::MARGIN_PX)
-            .x_label_area_size(style::X_LABEL_AREA_PX)
-            .y_label_area_size(style::Y_LABEL_AREA_PX)
-            .build_cartesian_2d(x_lo..x_hi, 0.0..top)
-            .map_err(&err)?;
-        style::draw_mesh(
-            &mut chart,
-            path,
-            &plot.x_label,
-            "number of samples",
-            AxisFonts::FULL,
-        )?;
-        chart
-            .draw_series(plot.counts.iter().enumerate().map(|(i, &c)| {
-                Rectangle::new(
-                    [(plot.edges[i], 0.0), (plot.edges[i + 1], c as f64)],
-                    style::MID_GREY.filled(),
-                )
-            }))
-            .map_err(&err)?;
-        chart
-            .draw_series(plot.counts.iter().enumerate().map(|(i, &c)| {
-                Rectangle::new(
-                    [(plot.edges[i], 0.0), (plot.edges[i + 1], c as f64)],
-                    style::INK.stroke_width(1),
-                )
-            }))
-            .map_err(&err)?;
-        for (j, (x, label)) in plot.ref_lines.iter().enumerate() {
-            let look = if j == 0 {
-                style::DARK_RED.stroke_width(2)
-            } else {
-                style::DARK_BLUE.stroke_width(2)
-            };
-            chart
-                .draw_series(std::iter::once(DashedPathElement::new(
-                    vec![(*x, 0.0), (*x, top / 1.25)],
-                    8,
-                    5,
-                    look,
-                )))
-                .map_err(&err)?
-                .label(label.clone())
-                .legend(move |(px, py)| {
-                    DashedPathElement::new(vec![(px, py), (px + 30, py)], 6, 4, look)
-                });
-        }
-        if !plot.ref_lines.is_empty() {
-            style::draw_legend(&mut chart, path, LegendPos::UpperLeft, AxisFonts::FULL)?;
-        }
-        let (w, _) = root.dim_in_pixel();
-        let font = style::text(style::LEGEND_PX).pos(Pos::new(HPos::Right, VPos::Top));
-        for (i, line) in plot.annotation.iter().enumerate() {
-            root.draw(&Text::new(
-                line.clone(),
-                (w as i32 - style::MARGIN_PX as i32 - 20, 80 + 26 * i as i32),
-                font.clone(),
-            ))
-            .map_err(&err)?;
+        let body = root.titled(&plot.title, style::title()).map_err(&err)?;
+        let areas = body.split_evenly((1, plot.panels.len()));
+        for ((area, panel), (edges, counts)) in areas.iter().zip(&plot.panels).zip(&binned) {
+            draw_panel(area, path, panel, edges, counts)?;
         }
         Ok(())
     })
+}
+
+fn draw_panel(
+    area: &Canvas<'_>,
+    path: &Path,
+    panel: &HistPanel,
+    edges: &[f64],
+    counts: &[usize],
+) -> Result<()> {
+    let err = plot_err(path);
+    let (x_lo, x_hi) = style::padded(edges[0], edges[edges.len() - 1], 0.03);
+    let top = counts.iter().copied().max().unwrap_or(1).max(1) as f64 * 1.3;
+    let mut chart = ChartBuilder::on(area)
+        .caption(&panel.title, style::text(style::LABEL_PX))
+        .margin(style::MARGIN_PX / 2)
+        .x_label_area_size(style::X_LABEL_AREA_PX)
+        .y_label_area_size(style::Y_LABEL_AREA_PX)
+        .build_cartesian_2d(x_lo..x_hi, 0.0..top)
+        .map_err(&err)?;
+    chart
+        .configure_mesh()
+        .x_desc(&panel.x_label)
+        .y_desc(&panel.y_label)
+        .axis_desc_style(style::text(style::LABEL_PX))
+        .label_style(style::text(style::TICK_PX))
+        .x_labels(6)
+        .bold_line_style(style::GRID.stroke_width(1))
+        .light_line_style(WHITE.stroke_width(0))
+        .axis_style(style::INK.stroke_width(1))
+        .draw()
+        .map_err(&err)?;
+    chart
+        .draw_series(edges.windows(2).zip(counts).map(|(e, &c)| {
+            Rectangle::new(
+                [(e[0], 0.0), (e[1], c as f64)],
+                style::DARK_BLUE.mix(0.55).filled(),
+            )
+        }))
+        .map_err(&err)?;
+    chart
+        .draw_series(edges.windows(2).zip(counts).map(|(e, &c)| {
+            Rectangle::new([(e[0], 0.0), (e[1], c as f64)], style::INK.stroke_width(1))
+        }))
+        .map_err(&err)?;
+    if let Some((s, unit)) = &panel.stats {
+        if s.mean.is_finite() && s.mean > x_lo && s.mean < x_hi {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    vec![(s.mean, 0.0), (s.mean, top)],
+                    6,
+                    4,
+                    style::DARK_RED.stroke_width(2),
+                ))
+                .map_err(&err)?;
+        }
+        let lines = [
+            format!("mean {} {unit} (dashed)", short(s.mean)),
+            format!("std {} {unit}", short(s.std)),
+            format!("max |·| {} {unit}", short(s.max_abs)),
+        ];
+        let (w, _) = area.dim_in_pixel();
+        let x = (w as i32 - 285).max(style::Y_LABEL_AREA_PX as i32 + 10);
+        for (i, l) in lines.iter().enumerate() {
+            area.draw(&Text::new(
+                l.clone(),
+                (x, 70 + 26 * i as i32),
+                style::text(style::LEGEND_PX),
+            ))
+            .map_err(&err)?;
+        }
+    }
+    Ok(())
+}
+
+/// Four significant digits at most, without trailing zeros.
+fn short(v: f64) -> String {
+    if v != 0.0 && (v.abs() >= 1e5 || v.abs() < 1e-3) {
+        return format!("{v:.3e}");
+    }
+    let digits = (3 - v.abs().log10().floor() as i32).clamp(0, 6) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    } else {
+        s
+    }
 }
 
 #[cfg(test)]
@@ -156,25 +245,63 @@ mod tests {
     use super::*;
 
     #[test]
-    fn shapes_are_checked_and_a_histogram_renders() {
-        let mut h = HistogramPlot {
+    fn binning_counts_every_value_once_and_edges_span_the_range() {
+        let v = [0.0, 0.1, 0.5, 0.99, 1.0, 2.0];
+        let (e, c) = bin(&v, 4).unwrap();
+        assert_eq!(e, vec![0.0, 0.5, 1.0, 1.5, 2.0]);
+        assert_eq!(c, vec![2, 2, 1, 1]);
+        let (e, c) = bin(&[3.0, 3.0], 2).unwrap();
+        assert_eq!((e[0], e[2], c.iter().sum::<usize>()), (2.5, 3.5, 2));
+        assert!(bin(&[], 3).is_err() && bin(&[1.0], 0).is_err() && bin(&[f64::NAN], 2).is_err());
+        assert_eq!(short(13.2264), "13.23");
+        assert_eq!(short(-0.0234), "-0.0234");
+    }
+
+    #[test]
+    fn renders_two_panels_and_rejects_ragged_bins() {
+        let dir = std::env::temp_dir().join(format!("pf-viz-hist-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("h.png");
+        let mut plot = HistogramPlot {
             title: "residuals".into(),
-            x_label: "residual (m³/s)".into(),
-            edges: vec![-1.0, -0.5, 0.0, 0.5, 1.0],
-            counts: vec![3, 10, 12, 2],
-            annotation: vec!["mean 0.01".into(), "std 0.4".into()],
-            ref_lines: vec![(0.0, "zero".into())],
+            panels: vec![
+                HistPanel {
+                    title: "a".into(),
+                    x_label: "x (m)".into(),
+                    y_label: "count".into(),
+                    data: HistData::Samples {
+                        values: (0..100).map(|i| (i as f64 * 0.37).sin()).collect(),
+                        bins: 12,
+                    },
+                    stats: Some((
+                        HistStats {
+                            mean: 0.01,
+                            std: 0.7,
+                            max_abs: 1.0,
+                        },
+                        "m".into(),
+                    )),
+                },
+                HistPanel {
+                    title: "b".into(),
+                    x_label: "y (kg)".into(),
+                    y_label: "count".into(),
+                    data: HistData::Binned {
+                        edges: vec![0.0, 1.0, 2.0],
+                        counts: vec![3, 5],
+                    },
+                    stats: None,
+                },
+            ],
         };
-        h.validate().unwrap();
-        let path = std::env::temp_dir().join(format!("pf-viz-hist-{}.png", std::process::id()));
-        render(&path, &h).unwrap();
-        let bytes = std::fs::read(&path).unwrap();
-        assert_eq!(&bytes[1..4], b"PNG");
-        assert!(bytes.len() > 5_000);
-        std::fs::remove_file(&path).unwrap();
-        h.edges.pop();
-        assert!(h.validate().is_err());
-        h.edges = vec![0.0, 0.0, 1.0, 2.0, 3.0];
-        assert!(h.validate().is_err());
+        render(&path, &plot).unwrap();
+        let png = std::fs::read(&path).unwrap();
+        assert_eq!(&png[1..4], b"PNG");
+        plot.panels[1].data = HistData::Binned {
+            edges: vec![0.0, 1.0],
+            counts: vec![3, 5],
+        };
+        assert!(render(&path, &plot).is_err());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -1,17 +1,18 @@
-//! `dredge.rrd`: one filter run over the simulated loading cycle, on the `time` timeline
-//! (seconds).
+//! `dredge.rrd`: one simulated loading cycle estimated on line, on the `time` timeline (s).
 //!
-//! Scalar series under `dredge/signals/…`: measured and estimated volume and mass, true and
-//! estimated `Q_o` and `ρ_o`, the inputs, and the ESS. The particle cloud of `(Q_o, ρ_o)`
-//! (`dredge/cloud/particles`, sized by weight) with the truth and the estimate. The
-//! blueprint puts the time series on the left and the cloud on the right.
+//! - `dredge/signals/…`: measured `V_t`, `m_t`, the inputs `Q_i`, `ρ_i`, and the simulated and
+//!   PF-estimated `Q_o`, `ρ_o`, as scalar series;
+//! - `dredge/cloud/…`: the particle cloud of `(Q_o, ρ_o)` after each update (every second
+//!   sample), with the estimate and the simulated value. The plane's x is `Q_o × 100` and
+//!   its y is `−ρ_o` (Rerun's y points down), both labelled by tick points.
 
 use std::path::Path;
 
-use pf_core::observe::CloudRecorder;
-use pf_dredge::Cycle;
-use pf_dredge::estimator::FilterRun;
-use pf_dredge::model::{Q_O, RHO_O, State};
+use pf_core::mc::stream_rng;
+use pf_dredge::EstimatorConfig;
+use pf_dredge::OnlineEstimator;
+use pf_dredge::model::{Q_O, RHO_O};
+use pf_dredge::simulator::Cycle;
 use rerun::blueprint::{
     Blueprint, BlueprintActivation, Horizontal, Spatial2DView, TimeSeriesView, Vertical,
 };
@@ -21,153 +22,173 @@ use rerun::{Points2D, RecordingStream, Scalars, SeriesLines};
 use super::{TIME, rrd_err, save_rrd};
 use crate::error::{Result, VizError};
 
-const GREY: [u8; 4] = [150, 150, 150, 255];
-const BLUE: [u8; 4] = [40, 90, 200, 255];
-const RED: [u8; 4] = [220, 50, 50, 255];
-const AMBER: [u8; 4] = [240, 170, 40, 255];
+const ROOT: &str = "dredge";
+const BLUE: [u8; 4] = [60, 110, 220, 255];
+const RED: [u8; 4] = [220, 60, 50, 255];
+const GREY: [u8; 4] = [160, 160, 160, 255];
+const GREEN: [u8; 4] = [60, 170, 90, 255];
+/// Plane scale of `Q_o`, so that 1 m³/s spans as much as 100 kg/m³.
+const Q_SCALE: f64 = 100.0;
 
-/// Write `dredge.rrd`.
-///
-/// # Errors
-/// A run whose length does not match the cycle, or a Rerun or I/O error naming `path`.
-pub fn save(
-    path: &Path,
-    cycle: &Cycle,
-    run: &FilterRun,
-    clouds: &CloudRecorder<State>,
-) -> Result<()> {
-    let n = cycle.len();
-    if run.estimates.q_o.len() != n || clouds.clouds.len() != n {
-        return Err(VizError::PlotData {
-            what: "dredge recording",
-            message: format!(
-                "{} estimates and {} clouds for {} samples",
-                run.estimates.q_o.len(),
-                clouds.clouds.len(),
-                n
-            ),
-        });
-    }
-    save_rrd(
-        path,
-        "pf-viz: hopper dredger overflow losses",
-        |rec, path| log(rec, cycle, run, clouds).map_err(rrd_err(path)),
-    )
+fn at(q: f64, rho: f64) -> [f32; 2] {
+    [(q * Q_SCALE) as f32, (-rho) as f32]
 }
 
-/// (entity, legend, colour) of every scalar series.
-const SERIES: [(&str, &str, [u8; 4]); 10] = [
-    ("dredge/signals/volume/measured", "V_t measured (m³)", GREY),
-    (
-        "dredge/signals/volume/estimated",
-        "V_t estimated (m³)",
-        BLUE,
-    ),
-    ("dredge/signals/mass/measured", "m_t measured (t)", GREY),
-    ("dredge/signals/mass/estimated", "m_t estimated (t)", BLUE),
-    ("dredge/signals/q_o/true", "Q_o simulated (m³/s)", RED),
-    ("dredge/signals/q_o/estimated", "Q_o estimated (m³/s)", BLUE),
-    ("dredge/signals/rho_o/true", "ρ_o simulated (kg/m³)", RED),
-    (
-        "dredge/signals/rho_o/estimated",
-        "ρ_o estimated (kg/m³)",
-        BLUE,
-    ),
-    ("dredge/signals/inputs/q_i", "Q_i (m³/s)", AMBER),
-    ("dredge/signals/ess", "effective sample size", GREY),
-];
+/// Estimate `cycle` on line with `cfg` (stream 0 of `seed`) and record it to `path`.
+///
+/// # Errors
+/// A failed filter step, or a recording or I/O error naming `path`.
+pub fn save(path: &Path, cycle: &Cycle, cfg: &EstimatorConfig, seed: u64) -> Result<()> {
+    save_rrd(path, "dredge", |rec, path| log(rec, path, cycle, cfg, seed))
+}
+
+fn series(
+    rec: &RecordingStream,
+    path: &Path,
+    entity: &str,
+    name: &str,
+    color: [u8; 4],
+) -> Result<()> {
+    rec.log_static(
+        format!("{ROOT}/signals/{entity}"),
+        &SeriesLines::new()
+            .with_names([name])
+            .with_colors([color])
+            .with_widths([2.0]),
+    )
+    .map_err(rrd_err(path))
+}
 
 fn log(
     rec: &RecordingStream,
-    c: &Cycle,
-    run: &FilterRun,
-    clouds: &CloudRecorder<State>,
-) -> rerun::RecordingStreamResult<()> {
-    blueprint().send(rec, BlueprintActivation::default())?;
-    for (entity, name, color) in SERIES {
-        rec.log_static(
-            entity,
-            &SeriesLines::new()
-                .with_names([name])
-                .with_colors([color])
-                .with_widths([2.0]),
-        )?;
+    path: &Path,
+    cycle: &Cycle,
+    cfg: &EstimatorConfig,
+    seed: u64,
+) -> Result<()> {
+    let err = rrd_err(path);
+    blueprint()
+        .send(rec, BlueprintActivation::default())
+        .map_err(&err)?;
+    for (e, n, c) in [
+        ("volume/measured", "V_t measured (m³)", GREY),
+        ("volume/true", "V_t simulated (m³)", BLUE),
+        ("mass/measured", "m_t measured (kg)", GREY),
+        ("mass/true", "m_t simulated (kg)", BLUE),
+        ("Q/Q_i", "Q_i (m³/s)", GREEN),
+        ("Q/Q_o_true", "Q_o simulated (m³/s)", BLUE),
+        ("Q/Q_o_pf", "Q_o PF estimate (m³/s)", RED),
+        ("rho/rho_i", "ρ_i (kg/m³)", GREEN),
+        ("rho/rho_o_true", "ρ_o simulated (kg/m³)", BLUE),
+        ("rho/rho_o_pf", "ρ_o PF estimate (kg/m³)", RED),
+    ] {
+        series(rec, path, e, n, c)?;
     }
-    let e = &run.estimates;
-    for k in 0..c.len() {
-        rec.set_duration_secs(TIME, c.t[k]);
-        let values = [
-            c.y_v[k],
-            e.v_t[k],
-            c.y_m[k] / 1000.0,
-            e.m_t[k] / 1000.0,
-            c.q_o[k],
-            e.q_o[k],
-            c.rho_o[k],
-            e.rho_o[k],
-            c.q_i[k],
-            e.ess[k],
-        ];
-        for ((entity, _, _), v) in SERIES.iter().zip(values) {
-            rec.log(*entity, &Scalars::single(v))?;
-        }
-        let cloud = &clouds.clouds[k];
-        let np = cloud.particles.len() as f64;
-        rec.log(
-            "dredge/cloud/particles",
-            &Points2D::new(
-                cloud
-                    .particles
-                    .iter()
-                    .map(|x| [x[Q_O] as f32, x[RHO_O] as f32]),
-            )
+    // Axis ticks of the cloud plane.
+    let q_ticks: Vec<f64> = (0..=3).map(|j| 4.0 * j as f64).collect();
+    let rho_ticks: Vec<f64> = (0..=6).map(|j| 1000.0 + 100.0 * j as f64).collect();
+    rec.log_static(
+        format!("{ROOT}/cloud/axes/q"),
+        &Points2D::new(q_ticks.iter().map(|&q| at(q, 980.0)))
+            .with_labels(q_ticks.iter().map(|q| format!("Q_o {q}")))
             .with_colors([GREY])
-            .with_radii(
-                cloud.weights.iter().map(|&w| {
-                    Radius::new_ui_points((2.0 * (np * w).sqrt()).clamp(0.8, 8.0) as f32)
-                }),
-            ),
-        )?;
-        rec.log(
-            "dredge/cloud/truth",
-            &Points2D::new([[c.q_o[k] as f32, c.rho_o[k] as f32]])
-                .with_colors([RED])
-                .with_radii([Radius::new_ui_points(5.0)])
-                .with_labels(["simulated"]),
-        )?;
-        rec.log(
-            "dredge/cloud/estimate",
-            &Points2D::new([[e.q_o[k] as f32, e.rho_o[k] as f32]])
-                .with_colors([BLUE])
-                .with_radii([Radius::new_ui_points(5.0)])
-                .with_labels(["estimate"]),
-        )?;
+            .with_radii([Radius::new_ui_points(2.0)])
+            .with_show_labels(true),
+    )
+    .map_err(&err)?;
+    rec.log_static(
+        format!("{ROOT}/cloud/axes/rho"),
+        &Points2D::new(rho_ticks.iter().map(|&r| at(-0.3, r)))
+            .with_labels(rho_ticks.iter().map(|r| format!("ρ_o {r}")))
+            .with_colors([GREY])
+            .with_radii([Radius::new_ui_points(2.0)])
+            .with_show_labels(true),
+    )
+    .map_err(&err)?;
+
+    let data = cycle.to_data();
+    let mut online = OnlineEstimator::new(cfg).map_err(VizError::paper("dredge"))?;
+    let mut rng = stream_rng(seed, 0);
+    let mut cloud: Vec<[f32; 2]> = Vec::with_capacity(cfg.n_particles);
+    for k in 0..data.len() {
+        let est = online
+            .push(&data.sample(k), &mut rng)
+            .map_err(VizError::paper("dredge"))?;
+        // Whole seconds as a sequence: the viewer then opens the series on the whole cycle
+        // (a duration timeline opens them on the last minute).
+        rec.set_time_sequence(TIME, cycle.t[k].round() as i64);
+        let scalars = [
+            ("volume/measured", cycle.y_v[k]),
+            ("volume/true", cycle.v_t[k]),
+            ("mass/measured", cycle.y_m[k]),
+            ("mass/true", cycle.m_t[k]),
+            ("Q/Q_i", cycle.q_i[k]),
+            ("Q/Q_o_true", cycle.q_o[k]),
+            ("Q/Q_o_pf", est.q_o),
+            ("rho/rho_i", cycle.rho_i[k]),
+            ("rho/rho_o_true", cycle.rho_o[k]),
+            ("rho/rho_o_pf", est.rho_o),
+        ];
+        for (e, v) in scalars {
+            rec.log(format!("{ROOT}/signals/{e}"), &Scalars::single(v))
+                .map_err(&err)?;
+        }
+        if k % 2 == 0 {
+            if let Some(pf) = online.filter() {
+                cloud.clear();
+                cloud.extend(pf.particles().iter().map(|x| at(x[Q_O], x[RHO_O])));
+                rec.log(
+                    format!("{ROOT}/cloud/particles"),
+                    &Points2D::new(cloud.iter().copied())
+                        .with_colors([GREY])
+                        .with_radii([Radius::new_ui_points(1.5)]),
+                )
+                .map_err(&err)?;
+            }
+            rec.log(
+                format!("{ROOT}/cloud/estimate"),
+                &Points2D::new([at(est.q_o, est.rho_o)])
+                    .with_colors([RED])
+                    .with_radii([Radius::new_ui_points(6.0)])
+                    .with_labels(["PF estimate"]),
+            )
+            .map_err(&err)?;
+            rec.log(
+                format!("{ROOT}/cloud/simulated"),
+                &Points2D::new([at(cycle.q_o[k], cycle.rho_o[k])])
+                    .with_colors([BLUE])
+                    .with_radii([Radius::new_ui_points(6.0)])
+                    .with_labels(["simulated"]),
+            )
+            .map_err(&err)?;
+        }
     }
     Ok(())
 }
 
+/// Signals on the left (volume, mass, flows, densities), the cloud on the right.
 fn blueprint() -> Blueprint {
     Blueprint::new(
         Horizontal::new([
             Vertical::new([
-                TimeSeriesView::new("overflow flow-rate Q_o (m³/s)")
-                    .with_origin("dredge/signals/q_o")
-                    .into(),
-                TimeSeriesView::new("overflow density ρ_o (kg/m³)")
-                    .with_origin("dredge/signals/rho_o")
-                    .into(),
                 TimeSeriesView::new("hopper volume V_t (m³)")
-                    .with_origin("dredge/signals/volume")
+                    .with_origin(format!("{ROOT}/signals/volume"))
                     .into(),
-                TimeSeriesView::new("hopper mass m_t (t)")
-                    .with_origin("dredge/signals/mass")
+                TimeSeriesView::new("hopper mass m_t (kg)")
+                    .with_origin(format!("{ROOT}/signals/mass"))
+                    .into(),
+                TimeSeriesView::new("flow-rates Q_i, Q_o (m³/s)")
+                    .with_origin(format!("{ROOT}/signals/Q"))
+                    .into(),
+                TimeSeriesView::new("densities ρ_i, ρ_o (kg/m³)")
+                    .with_origin(format!("{ROOT}/signals/rho"))
                     .into(),
             ])
             .into(),
-            Spatial2DView::new("particle cloud: x = Q_o (m³/s), y = ρ_o (kg/m³)")
-                .with_origin("dredge/cloud")
+            Spatial2DView::new("particle cloud: x = Q_o × 100 (m³/s), y = −ρ_o (kg/m³)")
+                .with_origin(format!("{ROOT}/cloud"))
                 .into(),
         ])
-        .with_column_shares([3.0, 2.0]),
+        .with_column_shares([1.0, 1.0]),
     )
 }
