@@ -69,13 +69,3 @@ pub use path_space::PathSpace;
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
 
-/// Old names of [`experiments`], kept only until the workspace README's example uses the new
-/// ones (`experiments::{EmExperiment, em}`); not part of the API.
-#[doc(hidden)]
-pub mod cli {
-    pub use crate::experiments::{
-        EmExperiment as EmArgs, EmResult as EmOutput, ScoreExperiment as ScoreArgs,
-        ScoreResult as ScoreOutput, SemExperiment as SemArgs, SemResult as SemOutput, em, score,
-        sem,
-    };
-}
