@@ -68,4 +68,3 @@ pub use path_space::PathSpace;
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
-
