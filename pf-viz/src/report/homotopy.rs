@@ -158,6 +158,14 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         rmse: rm,
         ablation: abl,
     };
+    let mut files = Vec::new();
+    if ctx.write_rrd() {
+        #[cfg(feature = "rrd")]
+        {
+            write_rrd(ctx, &report)?;
+            files.push("homotopy.rrd".to_owned());
+        }
+    }
     Ok(SectionReport {
         result: to_json(ctx, &report)?,
         figures: vec![
@@ -198,8 +206,54 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         ],
         tables: vec![cost],
         notes,
-        files: Vec::new(),
+        files,
     })
+}
+
+/// `homotopy.rrd`: one realisation (stream 0 of the seed, the one of Fig. 2) tracked by
+/// every filter, and the OHF ellipse at sample K on a fine λ grid (0, 0.05, …, 1).
+#[cfg(feature = "rrd")]
+fn write_rrd(ctx: &Context<'_>, report: &HomotopyReport) -> Result<()> {
+    use pf_core::mc::stream_rng;
+    use pf_homotopy::filters::{Algorithm, track};
+
+    let paper = VizError::paper(PAPER);
+    let rc = &report.rmse_config;
+    let real = rc
+        .scenario
+        .simulate(&mut stream_rng(report.ellipses_config.seed, 0))
+        .map_err(paper)?;
+    let mut rng = stream_rng(report.ellipses_config.seed, 1);
+    let mut estimates = Vec::with_capacity(Algorithm::ALL.len());
+    for alg in Algorithm::ALL {
+        let est = track(alg, &rc.scenario, &rc.filters, &real, &mut rng).map_err(paper)?;
+        estimates.push((alg.name(), est));
+    }
+    let fine = EllipsesConfig {
+        lambda: (0..=20).map(|i| f64::from(i) / 20.0).collect(),
+        ..report.ellipses_config.clone()
+    };
+    let ell = ellipses(&fine).map_err(paper)?;
+    let shapes: Vec<([f64; 2], [f64; 2], f64)> = ell
+        .ellipses
+        .iter()
+        .map(|e| (e.center, e.semi_axes, e.angle))
+        .collect();
+    let target: Vec<[f64; 2]> = real.target.iter().map(|x| [x[0], x[1]]).collect();
+    let observer: Vec<[f64; 2]> = real.observer.iter().map(|o| o.pos).collect();
+    crate::rrd::homotopy::save(
+        &ctx.path("homotopy.rrd"),
+        &crate::rrd::homotopy::HomotopyRrd {
+            target: &target,
+            observer: &observer,
+            bearings: &real.bearings,
+            estimates: &estimates,
+            ellipse_step: fine.step,
+            lambda: &ell.lambda,
+            ellipses: &shapes,
+            truth: ell.truth,
+        },
+    )
 }
 
 fn fig1(ctx: &Context<'_>, s: &ScenarioGeometry) -> Result<()> {
