@@ -1,6 +1,8 @@
 //! `homotopy.rrd`: the OHF ellipses θ_K(λ) on the `lambda` timeline (sequence in thousandths
 //! of λ), and target, observer, bearing rays and every filter's estimate on the `step`
-//! timeline, all in one plane (metres, x east, y north).
+//! timeline, all in one plane (metres, x east, y north drawn upwards).
+//! Switch the timeline to `lambda` to see the ellipse flow from prediction (λ = 0) to
+//! posterior (λ = 1).
 
 use std::path::Path;
 
@@ -51,8 +53,9 @@ pub fn save(path: &Path, d: &HomotopyRrd<'_>) -> Result<()> {
     )
 }
 
+/// The viewer's 2-D y-axis points down: negate y so that north is up, as in the figures.
 fn pt(p: [f64; 2]) -> [f32; 2] {
-    [p[0] as f32, p[1] as f32]
+    [p[0] as f32, -p[1] as f32]
 }
 
 fn outline(c: [f64; 2], ax: [f64; 2], angle: f64) -> Vec<[f32; 2]> {
