@@ -284,3 +284,29 @@ fn rmse_json_has_the_cli_shape() {
     assert_eq!(res.time, [0.0, 1.0, 2.0, 3.0]);
     assert!(res.rmse.ohf.iter().all(|v| v.is_finite()));
 }
+
+/// The paper's ordering at the final sample (Fig. 3): OHF and AOHF below UKF-LPC. Our
+/// implementation disagrees (README, "Ordering: does not agree"), so this test is ignored
+/// rather than loosened; run it with `--ignored` after a change to the OHF's initialisation
+/// or λ grid: 24 realisations with fixed seed 0.
+#[test]
+#[ignore = "disagrees with the paper: UKF-LPC beats OHF/AOHF at the final time (see README)"]
+fn ohf_and_aohf_beat_ukf_lpc_at_the_final_time() {
+    use pf_homotopy::experiments::{RmseConfig, Scale};
+    let mut cfg = RmseConfig::at_scale(Scale::Quick);
+    cfg.realisations = 24;
+    cfg.filters.particles = 100;
+    let res = pf_homotopy::experiments::rmse(&cfg).unwrap();
+    let last = |v: &Vec<f64>| *v.last().unwrap();
+    let ukf = last(&res.rmse.ukf_lpc);
+    assert!(
+        last(&res.rmse.ohf) < ukf,
+        "OHF {} vs UKF-LPC {ukf}",
+        last(&res.rmse.ohf)
+    );
+    assert!(
+        last(&res.rmse.aohf) < ukf,
+        "AOHF {} vs UKF-LPC {ukf}",
+        last(&res.rmse.aohf)
+    );
+}
