@@ -135,13 +135,17 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             final_of(&rm.rmse.ukf_lpc),
             final_of(&rm.rmse.pf)
         ),
-        "Where UKF-LPC beats OHF/AOHF (the previous engineer's 500-realisation run: 521 m \
-         against 722/1203 m) this contradicts the paper. The cause has not been established: \
-         the suspected sign error in d (26) was not confirmed by this session (the exact \
-         linear-Gaussian test, where the flow must reach the Kalman posterior, passes, which \
-         a sign error in d would break). Open leads: the unstated bearing noise σ, the polar \
-         grid resolution and the λ-grid (see the ablations), and the prior's heading \
-         variance π²/12 read literally."
+        "Ordering disagrees with the paper: UKF-LPC beats OHF and AOHF at the final time \
+         (the previous 40-realisation run: 521 m against 722/1203 m). Not the cause: the \
+         sign of d (26) (we use the derived sign; the exact linear-Gaussian test reaches the \
+         Kalman posterior) and the polar grid (693-708 m from 12 x 6 to 96 x 48 nodes). Part \
+         of it: the OHF is not converged at 60 λ steps. Most likely cause: the gap opens \
+         before the manoeuvre, where the OHF's Cartesian Gaussian moment-matched to the very \
+         diffuse polar prior represents range far worse than the UKF-LPC's log-range. The \
+         AOHF converges in λ to a different limit than the OHF (crate README)."
+            .into(),
+        "Fig. 2: our ellipse barely moves from λ = 0 to 1 at sample 17, because the \
+         prediction is already thin along the bearing; the paper's moves markedly."
             .into(),
         "Values the paper leaves unstated and that we chose: see the crate README (bearing \
          noise σ, 40 samples, bearings counter-clockwise from the x-axis, 95 % ellipses)."
