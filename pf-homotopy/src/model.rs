@@ -352,6 +352,14 @@ pub fn process_noise(q: f64, t: f64) -> Matrix4<f64> {
     m
 }
 
+/// The bearing `h(x, ρ) = atan2(y − ζ, x − ξ)` of eq. (22): angle of the target position
+/// `p` seen from the observer `ρ`, counter-clockwise from the x-axis, in (−π, π]. The
+/// paper's `arctan((y − ζ)/(x − ξ))` is taken in its four-quadrant form. Residuals are
+/// wrapped with [`pf_core::geometry::wrap_angle`].
+pub fn bearing(p: [f64; 2], rho: [f64; 2]) -> f64 {
+    (p[1] - rho[1]).atan2(p[0] - rho[0])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -394,12 +402,4 @@ mod tests {
         assert!((dist(14, 15) - 2.0 * 154.0 / w * (w / 2.0).sin()).abs() < 1e-9);
         assert!((dist(20, 21) - 154.0).abs() < 1e-9);
     }
-}
-
-/// The bearing `h(x, ρ) = atan2(y − ζ, x − ξ)` of eq. (22): angle of the target position
-/// `p` seen from the observer `ρ`, counter-clockwise from the x-axis, in (−π, π]. The
-/// paper's `arctan((y − ζ)/(x − ξ))` is taken in its four-quadrant form. Residuals are
-/// wrapped with [`pf_core::geometry::wrap_angle`].
-pub fn bearing(p: [f64; 2], rho: [f64; 2]) -> f64 {
-    (p[1] - rho[1]).atan2(p[0] - rho[0])
 }
