@@ -22,7 +22,7 @@
 //! | §4: UKF-LPC benchmark (refs. \[2\], \[8\]) | [`filters::ukf_lpc`] |
 //! | §4: PF with the linearised optimal importance density (ref. \[3\]) | [`filters::pf`] |
 //! | §4: Figs. 1–3, cost, ablations | [`experiments`] |
-//! | bearings, wrapping | [`angle`] |
+//! | bearings (22); wrapping is `pf_core::geometry::wrap_angle` | [`model::bearing`] |
 //!
 //! ## Example: one OHF correction with a bearing
 //!
@@ -53,7 +53,6 @@
 //! - J. Hagmar, M. Jirstrand, L. Svensson, M. Morelande, "Optimal parameterization of
 //!   posterior densities using homotopy", *Fusion* 2011.
 
-pub mod angle;
 pub mod error;
 pub mod experiments;
 pub mod filters;

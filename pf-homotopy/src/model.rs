@@ -14,8 +14,8 @@ use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::angle::{bearing, wrap};
 use crate::error::{HomotopyError, Result, check_finite, check_positive};
+use pf_core::geometry::wrap_angle;
 
 /// The target state `[x, y, ẋ, ẏ]`.
 pub type State = Vector4<f64>;
@@ -270,7 +270,7 @@ impl ScenarioConfig {
             }
             target.push(x);
             let v: f64 = StandardNormal.sample(rng);
-            bearings.push(wrap(bearing([x[0], x[1]], o.pos) + sigma * v));
+            bearings.push(wrap_angle(bearing([x[0], x[1]], o.pos) + sigma * v));
         }
         Ok(Realisation {
             target,
@@ -350,6 +350,14 @@ pub fn process_noise(q: f64, t: f64) -> Matrix4<f64> {
         }
     }
     m
+}
+
+/// The bearing `h(x, ρ) = atan2(y − ζ, x − ξ)` of eq. (22): angle of the target position
+/// `p` seen from the observer `ρ`, counter-clockwise from the x-axis, in (−π, π]. The
+/// paper's `arctan((y − ζ)/(x − ξ))` is taken in its four-quadrant form. Residuals are
+/// wrapped with [`pf_core::geometry::wrap_angle`].
+pub fn bearing(p: [f64; 2], rho: [f64; 2]) -> f64 {
+    (p[1] - rho[1]).atan2(p[0] - rho[0])
 }
 
 #[cfg(test)]

@@ -18,9 +18,9 @@
 use nalgebra::{SMatrix, SVector, Vector2};
 use serde::{Deserialize, Serialize};
 
-use crate::angle::wrap;
 use crate::error::{HomotopyError, Result, check_positive};
 use crate::param::{Gaussian, log_normal};
+use pf_core::geometry::wrap_angle;
 
 const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
@@ -203,7 +203,7 @@ fn bearing_extent(
     for i in 0..M {
         let t = std::f64::consts::TAU * i as f64 / M as f64;
         let q = d + c * l * Vector2::new(t.cos(), t.sin());
-        let db = wrap(q[1].atan2(q[0]) - bc);
+        let db = wrap_angle(q[1].atan2(q[0]) - bc);
         lo = lo.min(db);
         hi = hi.max(db);
     }
@@ -223,9 +223,9 @@ impl PolarGrid {
         }
     }
 
-    /// `log g(y | β) = log N(wrap(y − β); 0, σ²)`, eq. (21), as a function of the bearing β.
+    /// `log g(y | β) = log N(wrap_angle(y − β); 0, σ²)`, eq. (21), as a function of the bearing β.
     pub fn log_g_bearing(&self, beta: f64) -> f64 {
-        let e = wrap(self.y - beta) / self.sigma;
+        let e = wrap_angle(self.y - beta) / self.sigma;
         -0.5 * (LN_2PI + e * e) - self.sigma.ln()
     }
 }

@@ -3,13 +3,14 @@
 
 use nalgebra::DMatrix;
 use nalgebra::{Matrix2, Matrix4, Vector2, Vector4};
+use pf_core::geometry::wrap_angle;
 use pf_core::mc::stream_rng;
 use pf_core::{Proposal, StateSpaceModel, TransitionDensity};
 use pf_homotopy::HomotopyError;
-use pf_homotopy::angle::{bearing, wrap};
 use pf_homotopy::filters::pf::{BotModel, LinearisedOptimal};
 use pf_homotopy::filters::ukf_lpc::{CartesianUkf, UkfLpc};
 use pf_homotopy::model::ScenarioConfig;
+use pf_homotopy::model::bearing;
 use pf_homotopy::param::{Derivatives, Gaussian};
 use pf_homotopy::quadrature::{
     Nodes, PolarGrid, PolarGridConfig, TemperedQuadrature, node_moments,
@@ -113,11 +114,11 @@ fn linearised_optimal_weights_equal_the_predictive_density() {
     let model = BotModel::new(&sc, vec![[0.0, 0.0]; 3], 0.0).unwrap();
     let x_prev = Vector4::new(-5000.0, 0.5, -10.0, 3.0);
     let xb = sc.f() * x_prev;
-    let y = wrap(bearing([xb[0], xb[1]], [0.0, 0.0]) + 0.015);
+    let y = wrap_angle(bearing([xb[0], xb[1]], [0.0, 0.0]) + 0.015);
     let r2 = xb[0] * xb[0] + xb[1] * xb[1];
     let h = nalgebra::RowVector4::new(-xb[1] / r2, xb[0] / r2, 0.0, 0.0);
     let s = (h * sc.q_matrix() * h.transpose())[(0, 0)] + sc.sigma().powi(2);
-    let e = wrap(y - bearing([xb[0], xb[1]], [0.0, 0.0]));
+    let e = wrap_angle(y - bearing([xb[0], xb[1]], [0.0, 0.0]));
     let want = -0.5 * ((2.0 * std::f64::consts::PI * s).ln() + e * e / s);
     let mut rng = stream_rng(3, 0);
     for _ in 0..200 {
@@ -172,7 +173,7 @@ fn target_becomes_observable_only_after_the_manoeuvre() {
     for k in 0..x.len() {
         let b1 = bearing([x[k][0], x[k][1]], o[k].pos);
         let b2 = bearing([ghost[k][0], ghost[k][1]], o[k].pos);
-        assert!(wrap(b1 - b2).abs() < 1e-12);
+        assert!(wrap_angle(b1 - b2).abs() < 1e-12);
     }
     let acc = |k: usize| (ghost[k + 1] - 2.0 * ghost[k] + ghost[k - 1]).norm();
     for k in 1..12 {
@@ -282,4 +283,30 @@ fn rmse_json_has_the_cli_shape() {
     }
     assert_eq!(res.time, [0.0, 1.0, 2.0, 3.0]);
     assert!(res.rmse.ohf.iter().all(|v| v.is_finite()));
+}
+
+/// The paper's ordering at the final sample (Fig. 3): OHF and AOHF below UKF-LPC. Our
+/// implementation disagrees (README, "Ordering: does not agree"), so this test is ignored
+/// rather than loosened; run it with `--ignored` after a change to the OHF's initialisation
+/// or λ grid: 24 realisations with fixed seed 0.
+#[test]
+#[ignore = "disagrees with the paper: UKF-LPC beats OHF/AOHF at the final time (see README)"]
+fn ohf_and_aohf_beat_ukf_lpc_at_the_final_time() {
+    use pf_homotopy::experiments::{RmseConfig, Scale};
+    let mut cfg = RmseConfig::at_scale(Scale::Quick);
+    cfg.realisations = 24;
+    cfg.filters.particles = 100;
+    let res = pf_homotopy::experiments::rmse(&cfg).unwrap();
+    let last = |v: &Vec<f64>| *v.last().unwrap();
+    let ukf = last(&res.rmse.ukf_lpc);
+    assert!(
+        last(&res.rmse.ohf) < ukf,
+        "OHF {} vs UKF-LPC {ukf}",
+        last(&res.rmse.ohf)
+    );
+    assert!(
+        last(&res.rmse.aohf) < ukf,
+        "AOHF {} vs UKF-LPC {ukf}",
+        last(&res.rmse.aohf)
+    );
 }

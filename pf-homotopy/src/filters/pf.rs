@@ -3,7 +3,7 @@
 //!
 //! For `x_k | x_{k−1} ~ N(F x_{k−1}, Q)` and `y_k = h(x_k) + v`, linearising `h` at
 //! `x̄ = F x_{k−1}` (`H = ∂h/∂x(x̄)`, a 1 × 4 row) gives the Gaussian proposal
-//! `q(x | x_{k−1}, y_k) = N(x; x̄ + K e, Σ*)` with `e = wrap(y_k − h(x̄))`,
+//! `q(x | x_{k−1}, y_k) = N(x; x̄ + K e, Σ*)` with `e = wrap_angle(y_k − h(x̄))`,
 //! `S = H Q Hᵀ + σ²`, `K = Q Hᵀ / S`, `Σ* = Q − K S Kᵀ` and `Σ*⁻¹ = Q⁻¹ + HᵀH/σ²`. The weight
 //! is the exact `g(y_k|x) f(x|x_{k−1}) / q(x|x_{k−1}, y_k)` for the nonlinear model.
 //!
@@ -22,10 +22,11 @@ use pf_core::{Proposal, StateSpaceModel, TransitionDensity};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::angle::{bearing, wrap};
 use crate::error::{HomotopyError, Result};
+use crate::model::bearing;
 use crate::model::{PriorConfig, Realisation, ScenarioConfig, State};
 use crate::prior::sample_prior;
+use pf_core::geometry::wrap_angle;
 
 const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
@@ -91,7 +92,7 @@ impl BotModel {
         let (dx, dy) = (xb[0] - rho[0], xb[1] - rho[1]);
         let r2 = dx * dx + dy * dy;
         let h = RowVector4::new(-dy / r2, dx / r2, 0.0, 0.0);
-        let e = wrap(y - dy.atan2(dx));
+        let e = wrap_angle(y - dy.atan2(dx));
         let s = (h * self.q * h.transpose())[(0, 0)] + self.sigma * self.sigma;
         (xb, h, e, s)
     }
@@ -117,9 +118,9 @@ impl StateSpaceModel for BotModel {
         self.f * x_prev + self.lq * z
     }
 
-    /// `log N(wrap(y − h(x, ρ_t)); 0, σ²)`, eqs. (21)–(22).
+    /// `log N(wrap_angle(y − h(x, ρ_t)); 0, σ²)`, eqs. (21)–(22).
     fn log_likelihood(&self, t: usize, x: &State, y: &f64) -> f64 {
-        let e = wrap(y - bearing([x[0], x[1]], self.rho(t))) / self.sigma;
+        let e = wrap_angle(y - bearing([x[0], x[1]], self.rho(t))) / self.sigma;
         -0.5 * (LN_2PI + e * e) - self.sigma.ln()
     }
 }

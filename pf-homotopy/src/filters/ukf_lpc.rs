@@ -11,7 +11,7 @@
 //! over the augmented `[z_k; w_k]`, since `w_k ~ N(0, Q)` is additive in Cartesian, not in
 //! log-polar, coordinates.
 //!
-//! Bearings are kept continuous through the transform (`β' = β + wrap(β' − β)`) and every
+//! Bearings are kept continuous through the transform (`β' = β + wrap_angle(β' − β)`) and every
 //! residual is wrapped (`pf_core::kalman::Ukf` takes the residual as a closure).
 //!
 //! ## References
@@ -22,9 +22,10 @@
 use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 use pf_core::kalman::{KalmanState, Ukf, UkfParams};
 
-use crate::angle::{bearing, wrap};
 use crate::error::{HomotopyError, Result};
+use crate::model::bearing;
 use crate::model::{ObserverState, Realisation, ScenarioConfig};
+use pf_core::geometry::wrap_angle;
 
 /// Log-polar coordinates `[β, ln r, β̇, ṙ/r]` of a relative Cartesian state `[x, y, ẋ, ẏ]`.
 pub fn lpc_from_rel(s: &Vector4<f64>) -> Vector4<f64> {
@@ -59,7 +60,7 @@ fn v4(d: &DVector<f64>, off: usize) -> Vector4<f64> {
 
 fn wrapped_residual(a: &DVector<f64>, b: &DVector<f64>) -> DVector<f64> {
     let mut d = a - b;
-    d[0] = wrap(d[0]);
+    d[0] = wrap_angle(d[0]);
     d
 }
 
@@ -124,7 +125,7 @@ impl UkfLpc {
                     s * h.sin() - ov[1],
                 );
                 let mut z = lpc_from_rel(&rel);
-                z[0] = b + wrap(z[0] - b);
+                z[0] = b + wrap_angle(z[0] - b);
                 if r <= 0.0 {
                     z[1] = f64::NAN;
                 }
@@ -159,7 +160,7 @@ impl UkfLpc {
             &mut st,
             |x| {
                 let mut z = lpc_from_rel(&(v4(x, 0) - o));
-                z[0] = b0 + wrap(z[0] - b0);
+                z[0] = b0 + wrap_angle(z[0] - b0);
                 DVector::from_column_slice(z.as_slice())
             },
             &DMatrix::zeros(4, 4),
@@ -216,7 +217,7 @@ impl UkfLpc {
                 let w = v4(x, 4);
                 let s_next = f * (rel_from_lpc(&z) + op) - on + w;
                 let mut z2 = lpc_from_rel(&s_next);
-                z2[0] = z[0] + wrap(z2[0] - z[0]);
+                z2[0] = z[0] + wrap_angle(z2[0] - z[0]);
                 let mut out = x.clone();
                 out.rows_mut(0, 4).copy_from(&z2);
                 out
@@ -241,7 +242,7 @@ impl UkfLpc {
             &yv,
             wrapped_residual,
         )?;
-        self.state.m[0] = wrap(self.state.m[0]);
+        self.state.m[0] = wrap_angle(self.state.m[0]);
         Ok(())
     }
 
