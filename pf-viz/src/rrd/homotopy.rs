@@ -63,7 +63,8 @@ fn log(
     estimates: &[(&str, Vec<[f64; 2]>)],
 ) -> rerun::RecordingStreamResult<()> {
     blueprint().send(rec, BlueprintActivation::default())?;
-    let f = |p: [f64; 2]| [p[0] as f32, p[1] as f32];
+    // Rerun's 2-D y axis points down: negate north so the picture has north up.
+    let f = |p: [f64; 2]| [p[0] as f32, -p[1] as f32];
     rec.log_static(
         "homotopy/ellipse/truth",
         &Points2D::new([f(ell.truth)])
@@ -99,14 +100,12 @@ fn log(
         rec.set_time_sequence(STEP, k as i64 + 1);
         let x = real.target[k];
         let o = real.observer[k].pos;
-        let target_trail: Vec<[f32; 2]> = real.target[..=k]
-            .iter()
-            .map(|x| [x[0] as f32, x[1] as f32])
-            .collect();
+        let target_trail: Vec<[f32; 2]> =
+            real.target[..=k].iter().map(|x| f([x[0], x[1]])).collect();
         let observer_trail: Vec<[f32; 2]> = real.observer[..=k].iter().map(|o| f(o.pos)).collect();
         rec.log(
             "homotopy/scene/target",
-            &Points2D::new([[x[0] as f32, x[1] as f32]])
+            &Points2D::new([f([x[0], x[1]])])
                 .with_colors([RED])
                 .with_radii([Radius::new_ui_points(5.0)])
                 .with_labels(["target"]),
@@ -147,10 +146,12 @@ fn log(
 
 fn blueprint() -> Blueprint {
     Blueprint::new(Horizontal::new([
-        Spatial2DView::new("tracking run: target, observer, bearing, estimates (m; step)")
-            .with_origin("homotopy/scene")
-            .into(),
-        Spatial2DView::new("OHF ellipse at sample 17 as λ goes 0 → 1 (m; lambda × 1000)")
+        Spatial2DView::new(
+            "tracking run: target, observer, bearing, estimates (m, north up; step)",
+        )
+        .with_origin("homotopy/scene")
+        .into(),
+        Spatial2DView::new("OHF ellipse at sample 17 as λ goes 0 → 1 (m, north up; lambda × 1000)")
             .with_origin("homotopy/ellipse")
             .into(),
     ]))
