@@ -277,16 +277,12 @@ fn draw_panel(area: &Canvas<'_>, path: &Path, p: &BoxPanel) -> Result<()> {
     }
 
     if !p.ref_lines.is_empty() {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .margin(8)
-            .legend_area_size(36)
-            .label_font(style::text(style::LEGEND_PX))
-            .background_style(WHITE.mix(0.88))
-            .border_style(style::MID_GREY)
-            .draw()
-            .map_err(&err)?;
+        style::draw_legend(
+            &mut chart,
+            path,
+            style::LegendPos::UpperRight,
+            style::AxisFonts::FULL,
+        )?;
     }
     Ok(())
 }

@@ -275,17 +275,12 @@ fn draw(
             .map_err(&err)?;
     }
 
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .margin(12)
-        .legend_area_size(40)
-        .label_font(style::text(style::LEGEND_PX))
-        .background_style(WHITE.mix(0.88))
-        .border_style(style::MID_GREY)
-        .draw()
-        .map_err(&err)?;
-    Ok(())
+    style::draw_legend(
+        &mut chart,
+        path,
+        style::LegendPos::UpperLeft,
+        style::AxisFonts::FULL,
+    )
 }
 
 #[cfg(test)]
