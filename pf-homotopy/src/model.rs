@@ -6,8 +6,11 @@
 //!
 //! Angle convention (the paper gives none): bearings and headings are measured
 //! counter-clockwise from the x-axis, as the `arctan((y − ζ)/(x − ξ))` of (22) implies, and a
-//! positive turn rate turns the observer counter-clockwise. Sampling instant `k = 1, …, K`
-//! is at time `(k − 1)T`.
+//! positive turn rate turns the observer counter-clockwise. The paper gives the turn rate
+//! (30°/s) but not its direction; the default turns the observer clockwise (−30°/s), the
+//! direction under which the 17th bearing brings the "dramatic increase in information"
+//! of Section 4.1 (the crate README measures both). Sampling instant `k = 1, …, K` is at
+//! time `(k − 1)T`.
 
 use nalgebra::{Matrix4, SMatrix, Vector4};
 use rand::Rng;
@@ -85,13 +88,14 @@ pub struct ScenarioConfig {
     pub observer_speed: f64,
     /// Observer initial heading, degrees (−45).
     pub observer_heading_deg: f64,
-    /// Observer turn rate, degrees/s (30).
+    /// Observer turn rate, degrees/s, counter-clockwise positive (−30: the paper's 30°/s,
+    /// clockwise; see the module docs).
     pub turn_rate_deg: f64,
     /// Sampling instant at which the turn starts (13).
     pub turn_start: usize,
     /// Sampling instant at which the turn ends (17).
     pub turn_end: usize,
-    /// Bearing noise standard deviation σ, degrees (unstated; 1).
+    /// Bearing noise standard deviation σ, degrees (unstated; ½, see the README).
     pub sigma_deg: f64,
     /// Number of sampling instants K (unstated; 40).
     pub n_samples: usize,
@@ -110,10 +114,10 @@ impl Default for ScenarioConfig {
             t: 1.0,
             observer_speed: 154.0,
             observer_heading_deg: -45.0,
-            turn_rate_deg: 30.0,
+            turn_rate_deg: -30.0,
             turn_start: 13,
             turn_end: 17,
-            sigma_deg: 1.0,
+            sigma_deg: 0.5,
             n_samples: 40,
             prior: PriorConfig::default(),
         }
@@ -386,11 +390,20 @@ mod tests {
         let tr = s.observer_track();
         assert_eq!(tr[0].pos, [0.0, 0.0]);
         let head = |k: usize| tr[k - 1].vel[1].atan2(tr[k - 1].vel[0]).to_degrees();
-        // Headings are exact up to round-off in to_degrees/atan2.
+        // Headings are exact up to round-off in to_degrees/atan2; the default turn is
+        // clockwise, from −45° through −105° to −165°.
         assert!((head(13) + 45.0).abs() < 1e-9);
-        assert!((head(15) - 15.0).abs() < 1e-9);
-        assert!((head(17) - 75.0).abs() < 1e-9);
-        assert!((head(30) - 75.0).abs() < 1e-9);
+        assert!((head(15) + 105.0).abs() < 1e-9);
+        assert!((head(17) + 165.0).abs() < 1e-9);
+        assert!((head(30) + 165.0).abs() < 1e-9);
+        // A positive rate turns the other way.
+        let ccw = ScenarioConfig {
+            turn_rate_deg: 30.0,
+            ..s
+        }
+        .observer_track();
+        let head_ccw = |k: usize| ccw[k - 1].vel[1].atan2(ccw[k - 1].vel[0]).to_degrees();
+        assert!((head_ccw(17) - 75.0).abs() < 1e-9);
         // Constant speed: consecutive positions 154 m apart on straight legs, and the chord
         // 2(v/ω) sin(ωT/2) on the arc.
         let dist = |a: usize, b: usize| {

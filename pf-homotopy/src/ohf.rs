@@ -30,7 +30,7 @@
 //! - J. Hagmar, M. Jirstrand, L. Svensson, M. Morelande, "Optimal parameterization of
 //!   posterior densities using homotopy", *Fusion* 2011 (the HΔE).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{HomotopyError, Result};
@@ -47,6 +47,12 @@ pub enum Scheme {
     /// The approximate HΔE (17), with `H̃` (27) in closed form and `d̃` (28) under the
     /// current Gaussian `f(·; θ_k(λ_i))`: the AOHF.
     Ahde,
+    /// No flow: θ(λ) evaluated directly at each node as the KL-optimal Gaussian (8), i.e. the
+    /// mean and covariance of `g^λ f(·; θ_{k|k−1})` by quadrature. Not in the paper: it is
+    /// the limit the HΔE converges to as its steps shrink (the exact solution of (12)), made
+    /// computable here because the polar grid adapts to the tempered posterior itself. The
+    /// reference of the λ-step ablation; the tracker evaluates it at λ = 1 only.
+    Direct,
 }
 
 /// Spacing of the λ grid `0 = λ_0 < … < λ_m = 1`.
@@ -151,6 +157,19 @@ pub struct OhfConfig {
 }
 
 impl OhfConfig {
+    /// The λ nodes a correction visits, with `extra` values in (0, 1) merged in: the grid
+    /// of the flow, or only `0`, the extras and `1` for [`Scheme::Direct`].
+    pub fn nodes_with(&self, extra: &[f64]) -> Vec<f64> {
+        match self.scheme {
+            Scheme::Direct => LambdaGrid {
+                steps: 1,
+                spacing: Spacing::Uniform,
+            }
+            .nodes_with(extra),
+            Scheme::Hde | Scheme::Ahde => self.lambda.nodes_with(extra),
+        }
+    }
+
     /// The OHF (HΔE) with the default λ grid.
     pub fn ohf() -> Self {
         Self {
@@ -164,6 +183,14 @@ impl OhfConfig {
     pub fn aohf() -> Self {
         Self {
             scheme: Scheme::Ahde,
+            ..Self::ohf()
+        }
+    }
+
+    /// The direct KL-optimal Gaussian ([`Scheme::Direct`]), the HΔE's limit.
+    pub fn direct() -> Self {
+        Self {
+            scheme: Scheme::Direct,
             ..Self::ohf()
         }
     }
@@ -252,7 +279,7 @@ impl<const D: usize> OhfWorkspace<D> {
         }
         let deriv = self.deriv.as_mut().expect("set above");
         match scheme {
-            Scheme::Hde => quad.fill(prior, lambda, &mut self.nodes)?,
+            Scheme::Hde | Scheme::Direct => quad.fill(prior, lambda, &mut self.nodes)?,
             Scheme::Ahde => quad.fill(theta, 0.0, &mut self.nodes)?,
         }
         self.nodes.normalise(k, lambda)?;
@@ -271,7 +298,7 @@ impl<const D: usize> OhfWorkspace<D> {
                 deriv.accumulate_hessian(p, w, &mut self.h);
             }
         }
-        if scheme == Scheme::Ahde {
+        if scheme != Scheme::Hde {
             deriv.fisher(&mut self.h);
         }
         pf_core::gaussian::cholesky_into("H", &self.h, &mut self.l)
@@ -280,6 +307,42 @@ impl<const D: usize> OhfWorkspace<D> {
         self.l.solve_lower_triangular_unchecked_mut(&mut self.d);
         self.l.tr_solve_lower_triangular_unchecked_mut(&mut self.d);
         Ok(())
+    }
+
+    /// The KL-optimal Gaussian (8) at `λ`: the moments of `g^λ f(·; prior)` on the nodes.
+    fn moments<Q: TemperedQuadrature<D>>(
+        &mut self,
+        prior: &Gaussian<D>,
+        lambda: f64,
+        quad: &Q,
+        k: usize,
+    ) -> Result<Gaussian<D>> {
+        quad.fill(prior, lambda, &mut self.nodes)?;
+        self.nodes.normalise(k, lambda)?;
+        let nodes = &self.nodes;
+        let mean = nodes
+            .points
+            .iter()
+            .zip(&nodes.w)
+            .fold(SVector::<f64, D>::zeros(), |a, (p, &w)| a + p * w);
+        let cov =
+            nodes
+                .points
+                .iter()
+                .zip(&nodes.w)
+                .fold(SMatrix::<f64, D, D>::zeros(), |a, (p, &w)| {
+                    let e = p - mean;
+                    a + e * e.transpose() * w
+                });
+        let g = Gaussian::new(mean, 0.5 * (cov + cov.transpose()));
+        if g.chol().is_none() {
+            return Err(HomotopyError::FlowNotPositiveDefinite {
+                k,
+                lambda,
+                halvings: 0,
+            });
+        }
+        Ok(g)
     }
 }
 
@@ -306,6 +369,14 @@ pub fn correct<const D: usize, Q: TemperedQuadrature<D>>(
     let mut diag = OhfDiagnostics::default();
     if let Some(&l0) = lambdas.first() {
         on_lambda(l0, &theta);
+    }
+    if scheme == Scheme::Direct {
+        for &lam in lambdas.iter().skip(1) {
+            theta = ws.moments(prior, lam, quad, k)?;
+            diag.steps += 1;
+            on_lambda(lam, &theta);
+        }
+        return Ok((theta, diag));
     }
     for win in lambdas.windows(2) {
         let (mut lam, target) = (win[0], win[1]);

@@ -101,6 +101,9 @@ fn bad_arguments_get_one_line() {
             "particle",
         ),
         (&["homotopy", "rmse", "--scale", "huge"][..], "huge"),
+        (&["homotopy", "rmse", "--turn", "left"][..], "left"),
+        (&["homotopy", "ellipses", "--sigma-deg", "0"][..], "sigma"),
+        (&["homotopy", "ellipses", "--sigma-deg", "NaN"][..], "sigma"),
     ] {
         let o = pf_viz(args);
         assert!(!o.status.success(), "{args:?}");

@@ -1,13 +1,15 @@
 //! Ablation beyond the paper: final RMS position error of the OHF and AOHF against the
-//! number of λ steps and against the polar-grid resolution.
+//! number of λ steps (with the limit the HΔE converges to) and against the polar-grid
+//! resolution.
 
 use serde::{Deserialize, Serialize};
 
 use super::Scale;
-use super::rmse::{RmseConfig, replicate_errors};
+use super::rmse::{RmseConfig, final_squared_errors, replicate_errors};
 use crate::error::{HomotopyError, Result};
 use crate::filters::{Algorithm, FilterSettings};
 use crate::model::ScenarioConfig;
+use crate::ohf::OhfConfig;
 
 /// Settings of the ablation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -75,6 +77,9 @@ pub struct AblationResult {
     pub ohf_by_steps: Vec<f64>,
     /// AOHF final RMS error per λ step count.
     pub aohf_by_steps: Vec<f64>,
+    /// Final RMS error of the HΔE's limit, the KL-optimal Gaussian computed directly
+    /// ([`Scheme::Direct`](crate::ohf::Scheme::Direct)): where `ohf_by_steps` should go.
+    pub ohf_limit: f64,
     /// The grids `[n_β, n_r]` tried.
     pub grids: Vec<[usize; 2]>,
     /// OHF final RMS error per grid.
@@ -109,6 +114,7 @@ pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
         lambda_steps: cfg.lambda_steps.clone(),
         ohf_by_steps: Vec::new(),
         aohf_by_steps: Vec::new(),
+        ohf_limit: f64::NAN,
         grids: cfg.grids.clone(),
         ohf_by_grid: Vec::new(),
         aohf_by_grid: Vec::new(),
@@ -121,6 +127,10 @@ pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
         res.ohf_by_steps.push(o);
         res.aohf_by_steps.push(a);
     }
+    let mut direct = base.clone();
+    direct.filters.ohf = OhfConfig::direct();
+    let sq = final_squared_errors(&direct, &[Algorithm::Ohf])?;
+    res.ohf_limit = (sq[0].iter().sum::<f64>() / sq[0].len() as f64).sqrt();
     for &[nb, nr] in &cfg.grids {
         let mut c = base.clone();
         c.filters.grid.n_bearing = nb;

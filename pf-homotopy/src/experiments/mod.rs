@@ -8,16 +8,22 @@
 //! | [`ellipses`] | Fig. 2, OHF error ellipses over λ (CLI `ellipses`) |
 //! | [`rmse`] | Fig. 3, RMS position error, and the cost table (CLI `rmse`) |
 //! | [`ablation`] | final RMS error against λ steps and polar-grid resolution |
+//! | [`geometry`] | final RMS error against the unstated turn direction and σ |
+//! | [`information`] | information per bearing for each turn direction (the evidence for ours) |
 
 mod ablation;
 mod ellipses;
 mod fig1;
+mod geometry;
+mod information;
 mod rmse;
 
 pub use ablation::{AblationConfig, AblationResult, ablation};
 pub use ellipses::{Ellipse, EllipsesConfig, EllipsesResult, ellipses};
 pub use fig1::{ScenarioGeometry, scenario_geometry};
-pub use rmse::{PerAlgorithm, RmseConfig, RmseResult, rmse};
+pub use geometry::{GeometryCell, GeometryConfig, GeometryResult, geometry};
+pub use information::{InformationConfig, InformationResult, information};
+pub use rmse::{PerAlgorithm, RmseConfig, RmseResult, final_squared_errors, rmse};
 
 use serde::{Deserialize, Serialize};
 

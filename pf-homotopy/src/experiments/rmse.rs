@@ -149,6 +149,24 @@ pub(crate) fn replicate_errors(cfg: &RmseConfig, algs: &[Algorithm]) -> Result<E
     Ok((sq, secs))
 }
 
+/// Final squared position errors `e²[alg][r]` of `algs`, one per realisation (for paired
+/// comparisons between filters on the same realisations).
+///
+/// # Errors
+/// Invalid settings, or a filter failing on some realisation.
+pub fn final_squared_errors(cfg: &RmseConfig, algs: &[Algorithm]) -> Result<Vec<Vec<f64>>> {
+    cfg.validate()?;
+    let (sq, _) = replicate_errors(cfg, algs)?;
+    Ok(sq
+        .into_iter()
+        .map(|runs| {
+            runs.iter()
+                .map(|r| *r.last().unwrap_or(&f64::NAN))
+                .collect()
+        })
+        .collect())
+}
+
 /// Fig. 3 and the cost table.
 ///
 /// # Errors

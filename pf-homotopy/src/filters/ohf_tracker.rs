@@ -59,7 +59,7 @@ impl OhfTracker {
             f: scenario.f(),
             q: scenario.q_matrix(),
             sigma: scenario.sigma(),
-            lambdas: config.lambda.nodes(),
+            lambdas: config.nodes_with(&[]),
             state: gaussian_prior(&scenario.prior, y1, scenario.sigma(), rho1),
             ws: OhfWorkspace::new(),
             diagnostics: OhfDiagnostics::default(),
@@ -125,7 +125,7 @@ impl OhfTracker {
         let lambdas: &[f64] = if record_at.is_empty() {
             &self.lambdas
         } else {
-            merged = self.config.lambda.nodes_with(record_at);
+            merged = self.config.nodes_with(record_at);
             &merged
         };
         let (post, diag) = correct(

@@ -5,9 +5,13 @@
 //! |---|---|
 //! | `rmse` | `{"time", "rmse": {"OHF", "AOHF", "UKF-LPC", "PF"}, "seconds_per_run": {…}}` (Fig. 3) |
 //! | `ellipses` | `{"truth": [x, y], "lambda", "ellipses": [{"center", "semi_axes", "angle"}]}` (Fig. 2) |
+//!
+//! Both take `--turn clockwise|counter-clockwise` and `--sigma-deg`, the scenario values the
+//! paper leaves unstated (defaults: clockwise, ½°).
 
 use clap::{Args, Subcommand, ValueEnum};
 use pf_homotopy::experiments::{EllipsesConfig, RmseConfig, Scale, ellipses, rmse};
+use pf_homotopy::model::ScenarioConfig;
 
 use super::print_json;
 use crate::error::{Result, VizError};
@@ -32,6 +36,42 @@ pub enum RmseScale {
     Full,
 }
 
+/// Direction of the observer's 30°/s turn (the paper does not say).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Turn {
+    /// Clockwise: the default, the geometry of the paper's Section 4.1 (see the README).
+    Clockwise,
+    /// Counter-clockwise.
+    CounterClockwise,
+}
+
+/// The scenario values the paper leaves unstated.
+#[derive(Debug, Clone, Args)]
+pub struct ScenarioArgs {
+    /// Direction of the observer's turn.
+    #[arg(long, value_enum, default_value_t = Turn::Clockwise)]
+    pub turn: Turn,
+    /// Bearing noise standard deviation σ, degrees (default ½).
+    #[arg(long, value_name = "DEG")]
+    pub sigma_deg: Option<f64>,
+}
+
+impl ScenarioArgs {
+    /// The default scenario with these values.
+    fn scenario(&self) -> ScenarioConfig {
+        let base = ScenarioConfig::default();
+        let rate = base.turn_rate_deg.abs();
+        ScenarioConfig {
+            turn_rate_deg: match self.turn {
+                Turn::Clockwise => -rate,
+                Turn::CounterClockwise => rate,
+            },
+            sigma_deg: self.sigma_deg.unwrap_or(base.sigma_deg),
+            ..base
+        }
+    }
+}
+
 /// Arguments of `pf-viz homotopy rmse`.
 #[derive(Debug, Clone, Args)]
 pub struct RmseArgs {
@@ -47,6 +87,9 @@ pub struct RmseArgs {
     /// Size preset for what the flags leave unset.
     #[arg(long, value_enum, default_value_t = RmseScale::Default)]
     pub scale: RmseScale,
+    /// The unstated scenario values.
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -61,6 +104,9 @@ pub struct EllipsesArgs {
     /// Seed of the realisation.
     #[arg(long, value_name = "S", default_value_t = 0)]
     pub seed: u64,
+    /// The unstated scenario values.
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -80,6 +126,7 @@ pub fn run(cmd: HomotopyCommand) -> Result<()> {
                 RmseScale::Full => Scale::Full,
             });
             cfg.seed = a.seed;
+            cfg.scenario = a.scenario.scenario();
             if let Some(r) = a.realisations {
                 cfg.realisations = r;
             }
@@ -109,6 +156,7 @@ pub fn run(cmd: HomotopyCommand) -> Result<()> {
             let cfg = EllipsesConfig {
                 step: a.step,
                 seed: a.seed,
+                scenario: a.scenario.scenario(),
                 ..EllipsesConfig::default()
             };
             let r = ellipses(&cfg).map_err(homotopy)?;
