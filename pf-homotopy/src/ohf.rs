@@ -20,6 +20,13 @@
 //! - A step that leaves `Σ` non-positive-definite is halved (up to `max_halvings` times)
 //!   and the flow continues from the accepted half step: an adaptive refinement of the λ
 //!   grid, reported in [`OhfDiagnostics::halvings`].
+//! - On the solution path H (25) *is* the Fisher information of `f(·; θ)`, the closed form
+//!   (27): its integrand `−∇∇' log f(p; θ)` is quadratic in `p`, so its expectation depends
+//!   only on the first two moments of `π̃(·; λ)`, which (9) makes equal to those of
+//!   `f(·; θ)`. Off the path (Euler error) the quadrature of (25) can lose positive
+//!   definiteness when Σ has shrunk faster than the tempered posterior; such a step uses the
+//!   on-path value, the Fisher information, and is counted in
+//!   [`OhfDiagnostics::fisher_fallbacks`].
 //!
 //! Both `H` and `d` scale with `∫ π̃(p; λ) dp`, which cancels in `H⁻¹d`; the nodes are
 //! therefore normalised.
@@ -214,6 +221,9 @@ pub struct OhfDiagnostics {
     pub steps: usize,
     /// Step halvings needed to keep Σ positive definite.
     pub halvings: usize,
+    /// HΔE steps whose quadrature of H (25) was not positive definite and that used H's
+    /// value on the solution path, the Fisher information (27), instead (module docs).
+    pub fisher_fallbacks: usize,
 }
 
 /// Buffers of the correction, reused from call to call.
@@ -254,7 +264,7 @@ impl<const D: usize> OhfWorkspace<D> {
         &self.nodes
     }
 
-    /// `−H⁻¹d` at `(λ, θ)` into `self.d`.
+    /// `−H⁻¹d` at `(λ, θ)` into `self.d`; `true` when H fell back to the Fisher information.
     fn direction<Q: TemperedQuadrature<D>>(
         &mut self,
         prior: &Gaussian<D>,
@@ -263,7 +273,7 @@ impl<const D: usize> OhfWorkspace<D> {
         scheme: Scheme,
         quad: &Q,
         k: usize,
-    ) -> Result<()> {
+    ) -> Result<bool> {
         let not_pd = HomotopyError::FlowNotPositiveDefinite {
             k,
             lambda,
@@ -301,12 +311,20 @@ impl<const D: usize> OhfWorkspace<D> {
         if scheme != Scheme::Hde {
             deriv.fisher(&mut self.h);
         }
-        pf_core::gaussian::cholesky_into("H", &self.h, &mut self.l)
-            .map_err(|_| HomotopyError::HessianNotPositiveDefinite { k, lambda })?;
+        let mut fallback = false;
+        if pf_core::gaussian::cholesky_into("H", &self.h, &mut self.l).is_err() {
+            if scheme != Scheme::Hde {
+                return Err(HomotopyError::HessianNotPositiveDefinite { k, lambda });
+            }
+            deriv.fisher(&mut self.h);
+            pf_core::gaussian::cholesky_into("H", &self.h, &mut self.l)
+                .map_err(|_| HomotopyError::HessianNotPositiveDefinite { k, lambda })?;
+            fallback = true;
+        }
         // Direction −H⁻¹d = H⁻¹(−d).
         self.l.solve_lower_triangular_unchecked_mut(&mut self.d);
         self.l.tr_solve_lower_triangular_unchecked_mut(&mut self.d);
-        Ok(())
+        Ok(fallback)
     }
 
     /// The KL-optimal Gaussian (8) at `λ`: the moments of `g^λ f(·; prior)` on the nodes.
@@ -381,7 +399,9 @@ pub fn correct<const D: usize, Q: TemperedQuadrature<D>>(
     for win in lambdas.windows(2) {
         let (mut lam, target) = (win[0], win[1]);
         while lam < target {
-            ws.direction(prior, &theta, lam, scheme, quad, k)?;
+            if ws.direction(prior, &theta, lam, scheme, quad, k)? {
+                diag.fisher_fallbacks += 1;
+            }
             let mut h = target - lam;
             let mut halvings = 0;
             let cand = loop {

@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::Scale;
-use super::rmse::{RmseConfig, final_squared_errors, replicate_errors};
+use super::rmse::{RmseConfig, final_squared_errors};
 use crate::error::{HomotopyError, Result};
 use crate::filters::{Algorithm, FilterSettings};
 use crate::model::ScenarioConfig;
@@ -68,34 +68,42 @@ impl Default for AblationConfig {
     }
 }
 
-/// Final RMS position errors (m) of the ablation.
+/// Final RMS position errors (m) of the ablation. A setting under which a filter failed on
+/// some realisation (a coarse λ grid can lose positive definiteness for good: the paper's
+/// "numerical implementation of (13) can be quite difficult") has `None`, and the failure
+/// is listed in `failures`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AblationResult {
     /// The λ step counts tried.
     pub lambda_steps: Vec<usize>,
     /// OHF final RMS error per λ step count.
-    pub ohf_by_steps: Vec<f64>,
+    pub ohf_by_steps: Vec<Option<f64>>,
     /// AOHF final RMS error per λ step count.
-    pub aohf_by_steps: Vec<f64>,
+    pub aohf_by_steps: Vec<Option<f64>>,
     /// Final RMS error of the HΔE's limit, the KL-optimal Gaussian computed directly
     /// ([`Scheme::Direct`](crate::ohf::Scheme::Direct)): where `ohf_by_steps` should go.
     pub ohf_limit: f64,
     /// The grids `[n_β, n_r]` tried.
     pub grids: Vec<[usize; 2]>,
     /// OHF final RMS error per grid.
-    pub ohf_by_grid: Vec<f64>,
+    pub ohf_by_grid: Vec<Option<f64>>,
     /// AOHF final RMS error per grid.
-    pub aohf_by_grid: Vec<f64>,
+    pub aohf_by_grid: Vec<Option<f64>>,
+    /// The settings that failed, with the first error of each.
+    pub failures: Vec<String>,
 }
 
-fn final_rmse(cfg: &RmseConfig) -> Result<[f64; 2]> {
-    let (sq, _) = replicate_errors(cfg, &[Algorithm::Ohf, Algorithm::Aohf])?;
-    let mut out = [0.0; 2];
-    for (o, s) in out.iter_mut().zip(&sq) {
-        let r = pf_core::metrics::rmse_per_step(s)?;
-        *o = *r.last().unwrap_or(&f64::NAN);
+/// Final RMS errors of OHF and AOHF under `cfg`, each `None` (and the error recorded in
+/// `failures`) when that filter fails on some realisation.
+fn final_rmse(cfg: &RmseConfig, setting: &str, failures: &mut Vec<String>) -> [Option<f64>; 2] {
+    let mut out = [None; 2];
+    for (o, alg) in out.iter_mut().zip([Algorithm::Ohf, Algorithm::Aohf]) {
+        match final_squared_errors(cfg, &[alg]) {
+            Ok(sq) => *o = Some((sq[0].iter().sum::<f64>() / sq[0].len() as f64).sqrt()),
+            Err(e) => failures.push(format!("{} with {setting}: {e}", alg.name())),
+        }
     }
-    Ok(out)
+    out
 }
 
 /// Run both sweeps.
@@ -118,12 +126,13 @@ pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
         grids: cfg.grids.clone(),
         ohf_by_grid: Vec::new(),
         aohf_by_grid: Vec::new(),
+        failures: Vec::new(),
     };
     for &m in &cfg.lambda_steps {
         let mut c = base.clone();
         c.filters.ohf.lambda.steps = m;
         c.filters.aohf.lambda.steps = m;
-        let [o, a] = final_rmse(&c)?;
+        let [o, a] = final_rmse(&c, &format!("{m} λ steps"), &mut res.failures);
         res.ohf_by_steps.push(o);
         res.aohf_by_steps.push(a);
     }
@@ -135,7 +144,7 @@ pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
         let mut c = base.clone();
         c.filters.grid.n_bearing = nb;
         c.filters.grid.n_range = nr;
-        let [o, a] = final_rmse(&c)?;
+        let [o, a] = final_rmse(&c, &format!("a {nb} × {nr} grid"), &mut res.failures);
         res.ohf_by_grid.push(o);
         res.aohf_by_grid.push(a);
     }

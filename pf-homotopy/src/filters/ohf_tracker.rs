@@ -140,6 +140,7 @@ impl OhfTracker {
         )?;
         self.diagnostics.steps += diag.steps;
         self.diagnostics.halvings += diag.halvings;
+        self.diagnostics.fisher_fallbacks += diag.fisher_fallbacks;
         self.condition(&prior_p, &post)
     }
 

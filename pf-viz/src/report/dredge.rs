@@ -497,6 +497,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             .into(),
     ];
 
+    #[cfg_attr(not(feature = "rrd"), allow(unused_mut))] // only the recording adds files
     let mut files = Vec::new();
     if ctx.write_rrd() {
         #[cfg(feature = "rrd")]

@@ -230,6 +230,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             .into(),
     ];
 
+    #[cfg_attr(not(feature = "rrd"), allow(unused_mut))] // only the recording adds files
     let mut files = Vec::new();
     let recorded_particles = if ctx.scale == Scale::Quick { 100 } else { 500 };
     if ctx.write_rrd() {
