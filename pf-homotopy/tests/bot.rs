@@ -286,7 +286,7 @@ fn rmse_json_has_the_cli_shape() {
 }
 
 /// The paper's ordering at the final time (Section 4.2): OHF and AOHF both beat the UKF-LPC.
-/// A paired comparison on the same 24 realisations (seed 0, the default scenario): the mean
+/// A paired comparison on the same 40 realisations (seed 0, the default scenario): the mean
 /// of `e²_UKF − e²_OHF` over realisations must exceed 2.33 of its standard errors (a
 /// one-sided 1 % z-test), so a filter that merely ties the UKF-LPC fails. The PF is left out
 /// (its N does not matter here).
@@ -295,7 +295,7 @@ fn ohf_and_aohf_beat_ukf_lpc_at_the_final_time() {
     use pf_homotopy::experiments::{RmseConfig, Scale, final_squared_errors};
     use pf_homotopy::filters::Algorithm;
     let mut cfg = RmseConfig::at_scale(Scale::Quick);
-    cfg.realisations = 24;
+    cfg.realisations = 40;
     let algs = [Algorithm::UkfLpc, Algorithm::Ohf, Algorithm::Aohf];
     let sq = final_squared_errors(&cfg, &algs).unwrap();
     let rmse = |e: &[f64]| (e.iter().sum::<f64>() / e.len() as f64).sqrt();
