@@ -101,10 +101,10 @@ pub fn information(cfg: &InformationConfig) -> Result<InformationResult> {
                 obs[0].pos,
             )?;
             let mut out = Vec::with_capacity(real.bearings.len() - 1);
-            for k in 1..real.bearings.len() {
+            for (k, (&y, o)) in real.bearings.iter().zip(obs).enumerate().skip(1) {
                 tr.predict();
                 let before = tr.position().cov.determinant();
-                tr.update(k + 1, real.bearings[k], obs[k].pos)?;
+                tr.update(k + 1, y, o.pos)?;
                 out.push(0.5 * (before / tr.position().cov.determinant()).ln());
             }
             Ok::<_, HomotopyError>(out)
