@@ -19,7 +19,6 @@ pub use multinomial::Multinomial;
 pub use residual::Residual;
 pub use stratified::Stratified;
 pub use systematic::Systematic;
-pub(crate) use systematic::ceil_to_usize;
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};

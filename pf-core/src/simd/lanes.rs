@@ -157,11 +157,6 @@ impl LaneRng {
             }
         }
     }
-
-    /// The scalar fix-up stream (also a plain source of extra draws for the caller).
-    pub(crate) fn scalar(&mut self) -> &mut PfRng {
-        &mut self.fix
-    }
 }
 
 /// Layer index (low 8 bits) and uniform in [−1, 1) (top 52 bits) of a normal candidate.
