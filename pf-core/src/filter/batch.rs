@@ -31,7 +31,7 @@ use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
 use crate::resample::{Resample, Resampler};
-use crate::simd::math::exp_nonpositive;
+use crate::simd::math::{ROUND_MAGIC, exp_nonpositive};
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::RngExt;
 use rayon::prelude::*;
@@ -124,8 +124,6 @@ impl Default for ChunkStat {
 /// One worker's scratch, reused for every chunk it processes (it stays in L1/L2).
 #[derive(Debug, Clone)]
 struct Scratch {
-    /// Ancestor of each output of the chunk.
-    anc: Vec<usize>,
     /// Offspring boundary marks (all zero between uses).
     marks: Vec<usize>,
     /// Standard normals.
@@ -137,7 +135,6 @@ struct Scratch {
 impl Scratch {
     fn new(c: usize) -> Self {
         Scratch {
-            anc: vec![0; c],
             marks: vec![0; c],
             z: vec![0.0; c],
             l: vec![0.0; c],
@@ -526,9 +523,11 @@ fn chunk_step<M: ScalarModel>(
             l.copy_from_slice(&ctx.lw_old[lo..lo + len]);
         }
         Source::Systematic(u) => {
-            let anc = &mut s.anc[..len];
-            systematic_ancestors(ctx, u, lo, anc, &mut s.marks[..len]);
-            gather_propagate(model, t, ctx.x_old, anc, z, xs);
+            // The ancestors' states land in `l` (free until the weights are computed).
+            systematic_gather(ctx, u, lo, &mut s.marks[..len], l);
+            for ((x, &z), &xp) in xs.iter_mut().zip(z.iter()).zip(l.iter()) {
+                *x = model.transition_from_normal(t, xp, z);
+            }
             l.fill(ctx.log_uniform);
         }
         Source::Given => {
@@ -619,11 +618,15 @@ fn gather_propagate<M: ScalarModel>(
     }
 }
 
-/// `⌈x⌉` for `−1 < x < 2⁶³` as an index, without a libm call.
+/// `⌈x⌉` for `−1 < x < 2⁵¹`, as an index, in float and integer operations that vectorise
+/// (no libm call, no float-to-integer conversion, which AVX2 lacks for 64-bit integers).
 #[inline(always)]
 fn ceil_index(x: f64) -> usize {
-    let f = x as i64;
-    (f + i64::from((f as f64) < x)).max(0) as usize
+    // t = ROUND_MAGIC + round(x) exactly, and round(x) sits in t's low significand bits.
+    let t = x + ROUND_MAGIC;
+    let r = t - ROUND_MAGIC;
+    let k = (t.to_bits().wrapping_sub(ROUND_MAGIC.to_bits()) as i64) + i64::from(r < x);
+    k as usize
 }
 
 /// Offspring boundary of particle `j` under systematic resampling: the number of points
@@ -640,23 +643,37 @@ fn boundary<M>(ctx: &StepCtx<'_, M>, u: f64, j: usize) -> usize {
     ceil_index(g * ctx.n_over_total - u).min(ctx.n)
 }
 
-/// Ancestors of the outputs `lo .. lo + anc.len()` under systematic resampling with uniform
-/// `u`: `A_i = #{j < N − 1 : k_j ≤ i}`, the first particle whose boundary exceeds `i`.
+/// States of the ancestors of the outputs `lo .. lo + out.len()` under systematic
+/// resampling with uniform `u`: `out[i − lo] = x_old[A_i]` with `A_i = #{j < N − 1 : k_j ≤ i}`,
+/// the first particle whose boundary exceeds `i`.
 ///
 /// The first ancestor `a` (boundary above `lo`) is found by bisection, as `k` is
 /// non-decreasing. Then each particle whose boundary falls inside the chunk stores `j + 1`
 /// at its boundary (a later particle with the same boundary overwrites: a store, never a
-/// read-modify-write chain), and a running maximum turns the marks into ancestors.
+/// read-modify-write chain), and a running maximum turns the marks into ancestors, which
+/// are gathered on the spot. `marks` must be all zero, and is left so.
 #[inline(always)]
-fn systematic_ancestors<M>(
+fn systematic_gather<M>(
     ctx: &StepCtx<'_, M>,
     u: f64,
     lo: usize,
-    anc: &mut [usize],
     marks: &mut [usize],
+    out: &mut [f64],
 ) {
+    let a = systematic_marks(ctx, u, lo, marks);
+    let mut acc = a;
+    for (o, mk) in out.iter_mut().zip(marks.iter_mut()) {
+        acc = acc.max(*mk);
+        *mk = 0;
+        *o = ctx.x_old[acc];
+    }
+}
+
+/// The marking half of [`systematic_gather`]: returns `A_lo`, leaves `j + 1` at
+/// `marks[k_j − lo]` for every particle `j` with a boundary inside `(lo, lo + marks.len())`.
+#[inline(always)]
+fn systematic_marks<M>(ctx: &StepCtx<'_, M>, u: f64, lo: usize, marks: &mut [usize]) -> usize {
     let n = ctx.n;
-    let hi = lo + anc.len();
     let (mut a, mut b) = (0usize, n - 1);
     while a < b {
         let mid = (a + b) / 2;
@@ -666,26 +683,33 @@ fn systematic_ancestors<M>(
             a = mid + 1;
         }
     }
+    // Boundaries are computed SCAN at a time (a vectorised loop), then stored one by one.
+    // Every boundary from `a` on exceeds `lo`, so `k − lo ≥ 1`, and `k` falls past the
+    // chunk exactly when `k − lo` falls past `marks`.
+    const SCAN: usize = 64;
+    let mut kb = [0usize; SCAN];
     let mut j = a;
     'scan: while j + 1 < n {
         let d = j / ctx.c;
         let end = ((d + 1) * ctx.c).min(n - 1);
         let (off, scale) = (ctx.offset[d], ctx.scale[d]);
-        for (jj, &cw) in ctx.cw_old[j..end].iter().enumerate() {
-            let k = ceil_index((off + scale * cw) * ctx.n_over_total - u).min(n);
-            if k >= hi {
-                break 'scan;
+        while j < end {
+            let m = (end - j).min(SCAN);
+            for (k, &cw) in kb[..m].iter_mut().zip(&ctx.cw_old[j..j + m]) {
+                *k = ceil_index((off + scale * cw) * ctx.n_over_total - u)
+                    .min(n)
+                    .wrapping_sub(lo);
             }
-            marks[k - lo] = j + jj + 1;
+            for (q, &k) in kb[..m].iter().enumerate() {
+                match marks.get_mut(k) {
+                    Some(mk) => *mk = j + q + 1,
+                    None => break 'scan,
+                }
+            }
+            j += m;
         }
-        j = end;
     }
-    let mut acc = a;
-    for (o, mk) in anc.iter_mut().zip(marks.iter_mut()) {
-        acc = acc.max(*mk);
-        *mk = 0;
-        *o = acc;
-    }
+    a
 }
 
 #[cfg(test)]
@@ -787,8 +811,13 @@ mod tests {
                 let mut marks = vec![0usize; chunk];
                 for (d, out) in chunked.chunks_mut(chunk).enumerate() {
                     let len = out.len();
-                    systematic_ancestors(&ctx, u, d * chunk, out, &mut marks[..len]);
-                    assert!(marks.iter().all(|&k| k == 0), "marks left clean");
+                    let lo = d * chunk;
+                    let mut acc = systematic_marks(&ctx, u, lo, &mut marks[..len]);
+                    for (o, mk) in out.iter_mut().zip(marks.iter_mut()) {
+                        acc = acc.max(*mk);
+                        *mk = 0;
+                        *o = acc;
+                    }
                 }
                 // The merge: A_i = first j with i < G_j N/T − U, clamped to N − 1.
                 let mut j = 0;

@@ -8,7 +8,7 @@ use rand::{Rng, RngExt, SeedableRng};
 use rand_distr::Open01;
 
 /// Number of xoshiro256++ lanes stepped together (two AVX2 registers per state word).
-pub const LANES: usize = 8;
+pub const LANES: usize = 64;
 
 /// Draws produced per inner block of the samplers (a multiple of [`LANES`]): the raw bits of
 /// a block stay in L1 while its candidates are built and its rare rejections fixed up.
@@ -73,14 +73,16 @@ impl LaneRng {
         let [s0, s1, s2, s3] = &mut self.s;
         let mut out = [0u64; LANES];
         for l in 0..LANES {
-            out[l] = s0[l].wrapping_add(s3[l]).rotate_left(23).wrapping_add(s0[l]);
+            // Rotations as shift pairs: LLVM keeps those in vector registers.
+            let sum = s0[l].wrapping_add(s3[l]);
+            out[l] = ((sum << 23) | (sum >> 41)).wrapping_add(s0[l]);
             let t = s1[l] << 17;
             s2[l] ^= s0[l];
             s3[l] ^= s1[l];
             s1[l] ^= s2[l];
             s0[l] ^= s3[l];
             s2[l] ^= t;
-            s3[l] = s3[l].rotate_left(45);
+            s3[l] = (s3[l] << 45) ^ (s3[l] >> 19);
         }
         out
     }
@@ -125,34 +127,53 @@ impl LaneRng {
     /// The normal sampler's body, for callers already inside a dispatched kernel.
     #[inline(always)]
     pub(crate) fn fill_normal_inline(&mut self, out: &mut [f64]) {
-        let mut bits = [0u64; BLOCK];
-        for chunk in out.chunks_mut(BLOCK) {
-            let bits = &mut bits[..chunk.len().div_ceil(LANES) * LANES];
-            self.fill_bits(bits);
-            for (z, &b) in chunk.iter_mut().zip(bits.iter()) {
-                *z = normal_candidate(b);
-            }
-            for (z, &b) in chunk.iter_mut().zip(bits.iter()) {
-                if z.is_nan() {
-                    *z = normal_continue(b, &mut self.fix);
-                }
-            }
-        }
+        self.fill_ziggurat(out, normal_candidate, normal_continue);
     }
 
     /// The exponential sampler's body, for callers already inside a dispatched kernel.
     #[inline(always)]
     pub(crate) fn fill_exp1_inline(&mut self, out: &mut [f64]) {
+        self.fill_ziggurat(out, exp1_candidate, exp1_continue);
+    }
+
+    /// Blocks of [`BLOCK`] values: each lane step's draws become candidates at once (NaN
+    /// where a candidate falls outside its rectangle; a per-group flag records that), the
+    /// draws are kept, and a second sweep continues the rare rejected candidates on the
+    /// scalar stream, visiting only the flagged groups of eight.
+    #[inline(always)]
+    fn fill_ziggurat(
+        &mut self,
+        out: &mut [f64],
+        candidate: impl Fn(u64) -> f64,
+        continue_from: impl Fn(u64, &mut PfRng) -> f64,
+    ) {
+        const GROUP: usize = 8;
         let mut bits = [0u64; BLOCK];
+        let mut cand = [0.0f64; BLOCK];
+        let mut rejected = [false; BLOCK / GROUP];
         for chunk in out.chunks_mut(BLOCK) {
-            let bits = &mut bits[..chunk.len().div_ceil(LANES) * LANES];
-            self.fill_bits(bits);
-            for (e, &b) in chunk.iter_mut().zip(bits.iter()) {
-                *e = exp1_candidate(b);
+            let steps = chunk.len().div_ceil(LANES);
+            for (b, c) in bits
+                .chunks_exact_mut(LANES)
+                .zip(cand.chunks_exact_mut(LANES))
+                .take(steps)
+            {
+                let draws = self.step();
+                b.copy_from_slice(&draws);
+                for (c, &b) in c.iter_mut().zip(draws.iter()) {
+                    *c = candidate(b);
+                }
             }
-            for (e, &b) in chunk.iter_mut().zip(bits.iter()) {
-                if e.is_nan() {
-                    *e = exp1_continue(b, &mut self.fix);
+            for (flag, c) in rejected.iter_mut().zip(cand.chunks_exact(GROUP)) {
+                *flag = c.iter().fold(false, |r, v| r | v.is_nan());
+            }
+            chunk.copy_from_slice(&cand[..chunk.len()]);
+            for (g, _) in rejected.iter().enumerate().filter(|(_, r)| **r) {
+                let end = ((g + 1) * GROUP).min(chunk.len());
+                for p in (g * GROUP).min(end)..end {
+                    if chunk[p].is_nan() {
+                        chunk[p] = continue_from(bits[p], &mut self.fix);
+                    }
                 }
             }
         }
