@@ -124,20 +124,18 @@ impl Default for ChunkStat {
 /// One worker's scratch, reused for every chunk it processes (it stays in L1/L2).
 #[derive(Debug, Clone)]
 struct Scratch {
-    /// Offspring boundary marks (all zero between uses).
-    marks: Vec<usize>,
     /// Standard normals.
     z: Vec<f64>,
-    /// Log-weights, then weights relative to the chunk maximum.
+    /// Ancestors' states, then log-weights, then weights relative to the chunk maximum
+    /// (`PAD` longer than a chunk).
     l: Vec<f64>,
 }
 
 impl Scratch {
     fn new(c: usize) -> Self {
         Scratch {
-            marks: vec![0; c],
             z: vec![0.0; c],
-            l: vec![0.0; c],
+            l: vec![0.0; c + PAD],
         }
     }
 }
@@ -506,34 +504,36 @@ fn chunk_step<M: ScalarModel>(
     let (model, t) = (ctx.model, ctx.t);
     let z = &mut s.z[..len];
     rng.fill_normal_inline(z);
-    let l = &mut s.l[..len];
-    // Propagate, and set l to the prior log-weight.
+    // Propagate.
     match ctx.source {
         Source::Initial => {
             for (x, &z) in xs.iter_mut().zip(z.iter()) {
                 *x = model.initial_from_normal(z);
             }
-            l.fill(ctx.log_uniform);
         }
         Source::Identity => {
             let x_old = &ctx.x_old[lo..lo + len];
             for ((x, &z), &xp) in xs.iter_mut().zip(z.iter()).zip(x_old) {
                 *x = model.transition_from_normal(t, xp, z);
             }
-            l.copy_from_slice(&ctx.lw_old[lo..lo + len]);
         }
         Source::Systematic(u) => {
             // The ancestors' states land in `l` (free until the weights are computed).
-            systematic_gather(ctx, u, lo, &mut s.marks[..len], l);
+            systematic_gather(ctx, u, lo, len, &mut s.l[..len + PAD]);
+            let l = &s.l[..len];
             for ((x, &z), &xp) in xs.iter_mut().zip(z.iter()).zip(l.iter()) {
                 *x = model.transition_from_normal(t, xp, z);
             }
-            l.fill(ctx.log_uniform);
         }
         Source::Given => {
             gather_propagate(model, t, ctx.x_old, &ctx.ancestors[lo..lo + len], z, xs);
-            l.fill(ctx.log_uniform);
         }
+    }
+    // The prior log-weight: uniform after resampling, the previous one otherwise.
+    let l = &mut s.l[..len];
+    match ctx.source {
+        Source::Identity => l.copy_from_slice(&ctx.lw_old[lo..lo + len]),
+        _ => l.fill(ctx.log_uniform),
     }
     if let Some(y) = ctx.y {
         for (l, &x) in l.iter_mut().zip(xs.iter()) {
@@ -643,36 +643,23 @@ fn boundary<M>(ctx: &StepCtx<'_, M>, u: f64, j: usize) -> usize {
     ceil_index(g * ctx.n_over_total - u).min(ctx.n)
 }
 
-/// States of the ancestors of the outputs `lo .. lo + out.len()` under systematic
-/// resampling with uniform `u`: `out[i − lo] = x_old[A_i]` with `A_i = #{j < N − 1 : k_j ≤ i}`,
-/// the first particle whose boundary exceeds `i`.
-///
-/// The first ancestor `a` (boundary above `lo`) is found by bisection, as `k` is
-/// non-decreasing. Then each particle whose boundary falls inside the chunk stores `j + 1`
-/// at its boundary (a later particle with the same boundary overwrites: a store, never a
-/// read-modify-write chain), and a running maximum turns the marks into ancestors, which
-/// are gathered on the spot. `marks` must be all zero, and is left so.
-#[inline(always)]
-fn systematic_gather<M>(
-    ctx: &StepCtx<'_, M>,
-    u: f64,
-    lo: usize,
-    marks: &mut [usize],
-    out: &mut [f64],
-) {
-    let a = systematic_marks(ctx, u, lo, marks);
-    let mut acc = a;
-    for (o, mk) in out.iter_mut().zip(marks.iter_mut()) {
-        acc = acc.max(*mk);
-        *mk = 0;
-        *o = ctx.x_old[acc];
-    }
-}
+/// Padding after a chunk's scratch, for the unconditional four-wide stores of
+/// [`systematic_gather`].
+const PAD: usize = 4;
 
-/// The marking half of [`systematic_gather`]: returns `A_lo`, leaves `j + 1` at
-/// `marks[k_j − lo]` for every particle `j` with a boundary inside `(lo, lo + marks.len())`.
+/// States of the ancestors of the outputs `lo .. lo + len` under systematic resampling with
+/// uniform `u`, into `out[..len]` (`out` has [`PAD`] more slots, overwritten freely).
+///
+/// Output `i` descends from `A_i = #{j < N − 1 : k_j ≤ i}`, the first particle whose
+/// boundary `k_j` exceeds `i`; so particle `j` fills outputs `k_{j−1} … k_j − 1`. The first
+/// particle with a boundary above `lo` is found by bisection (`k` is non-decreasing); then
+/// the particles are walked in order, their boundaries computed 64 at a time (a vectorised
+/// loop), and each particle's state is written four times at its first output with one
+/// vector store, the next particle starting at its own first output and overwriting the
+/// surplus (a loop only for the rare particle with more than four copies). The previous
+/// states are read in order, never gathered.
 #[inline(always)]
-fn systematic_marks<M>(ctx: &StepCtx<'_, M>, u: f64, lo: usize, marks: &mut [usize]) -> usize {
+fn systematic_gather<M>(ctx: &StepCtx<'_, M>, u: f64, lo: usize, len: usize, out: &mut [f64]) {
     let n = ctx.n;
     let (mut a, mut b) = (0usize, n - 1);
     while a < b {
@@ -683,33 +670,38 @@ fn systematic_marks<M>(ctx: &StepCtx<'_, M>, u: f64, lo: usize, marks: &mut [usi
             a = mid + 1;
         }
     }
-    // Boundaries are computed SCAN at a time (a vectorised loop), then stored one by one.
-    // Every boundary from `a` on exceeds `lo`, so `k − lo ≥ 1`, and `k` falls past the
-    // chunk exactly when `k − lo` falls past `marks`.
     const SCAN: usize = 64;
     let mut kb = [0usize; SCAN];
+    let mut pos = 0usize;
     let mut j = a;
-    'scan: while j + 1 < n {
+    'walk: while j < n {
         let d = j / ctx.c;
-        let end = ((d + 1) * ctx.c).min(n - 1);
+        let end = ((d + 1) * ctx.c).min(n);
         let (off, scale) = (ctx.offset[d], ctx.scale[d]);
         while j < end {
             let m = (end - j).min(SCAN);
+            // Boundaries relative to lo, capped at the chunk's end.
             for (k, &cw) in kb[..m].iter_mut().zip(&ctx.cw_old[j..j + m]) {
-                *k = ceil_index((off + scale * cw) * ctx.n_over_total - u)
-                    .min(n)
-                    .wrapping_sub(lo);
+                let kj = ceil_index((off + scale * cw) * ctx.n_over_total - u);
+                *k = kj.min(lo + len).saturating_sub(lo);
             }
-            for (q, &k) in kb[..m].iter().enumerate() {
-                match marks.get_mut(k) {
-                    Some(mk) => *mk = j + q + 1,
-                    None => break 'scan,
+            if j + m == n {
+                // The last particle's boundary is N (the clamp).
+                kb[m - 1] = len;
+            }
+            for (&k, &x) in kb[..m].iter().zip(&ctx.x_old[j..j + m]) {
+                out[pos..pos + PAD].copy_from_slice(&[x; PAD]);
+                if k > pos + PAD {
+                    out[pos + PAD..k].fill(x);
+                }
+                pos = pos.max(k);
+                if pos >= len {
+                    break 'walk;
                 }
             }
             j += m;
         }
     }
-    a
 }
 
 #[cfg(test)]
@@ -767,7 +759,7 @@ mod tests {
         }
     }
 
-    /// The chunk-local systematic resampler (bisection, boundary marks, running maximum)
+    /// The chunk-local systematic resampler (bisection, boundaries, four-wide copies)
     /// draws exactly the ancestors of the textbook merge of the points `(i + U)/N` with the
     /// same global cumulative weights, whatever the chunk size.
     #[test]
@@ -782,6 +774,8 @@ mod tests {
             for y in &ys[..3] {
                 f.step(*y).unwrap();
             }
+            // States equal to their indices, so the gathered states are the ancestors.
+            let index: Vec<f64> = (0..n).map(|j| j as f64).collect();
             let ctx = StepCtx {
                 model: &f.model,
                 t: 3,
@@ -790,7 +784,7 @@ mod tests {
                 c: chunk,
                 log_uniform: 0.0,
                 source: Source::Identity,
-                x_old: &f.x,
+                x_old: &index,
                 lw_old: &f.lw,
                 cw_old: &f.cw,
                 offset: &f.offset,
@@ -807,18 +801,14 @@ mod tests {
                 })
                 .collect();
             for u in [0.0, 0.25, 0.731, 0.999_999] {
-                let mut chunked = vec![0usize; n];
-                let mut marks = vec![0usize; chunk];
-                for (d, out) in chunked.chunks_mut(chunk).enumerate() {
-                    let len = out.len();
-                    let lo = d * chunk;
-                    let mut acc = systematic_marks(&ctx, u, lo, &mut marks[..len]);
-                    for (o, mk) in out.iter_mut().zip(marks.iter_mut()) {
-                        acc = acc.max(*mk);
-                        *mk = 0;
-                        *o = acc;
-                    }
+                let mut chunked = vec![0.0; n];
+                let mut out = vec![f64::NAN; chunk + PAD];
+                for (d, dst) in chunked.chunks_mut(chunk).enumerate() {
+                    let len = dst.len();
+                    systematic_gather(&ctx, u, d * chunk, len, &mut out);
+                    dst.copy_from_slice(&out[..len]);
                 }
+                let chunked: Vec<usize> = chunked.iter().map(|&a| a as usize).collect();
                 // The merge: A_i = first j with i < G_j N/T − U, clamped to N − 1.
                 let mut j = 0;
                 let merge: Vec<usize> = (0..n)
