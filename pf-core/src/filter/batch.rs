@@ -31,7 +31,7 @@ use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
 use crate::resample::{Resample, Resampler};
-use crate::simd::math::{ROUND_MAGIC, exp_nonpositive};
+use crate::simd::math::{ceil_index, exp_nonpositive};
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::RngExt;
 use rayon::prelude::*;
@@ -616,17 +616,6 @@ fn gather_propagate<M: ScalarModel>(
     for ((x, &z), &a) in xs.iter_mut().zip(z).zip(anc) {
         *x = model.transition_from_normal(t, x_old[a], z);
     }
-}
-
-/// `⌈x⌉` for `−1 < x < 2⁵¹`, as an index, in float and integer operations that vectorise
-/// (no libm call, no float-to-integer conversion, which AVX2 lacks for 64-bit integers).
-#[inline(always)]
-fn ceil_index(x: f64) -> usize {
-    // t = ROUND_MAGIC + round(x) exactly, and round(x) sits in t's low significand bits.
-    let t = x + ROUND_MAGIC;
-    let r = t - ROUND_MAGIC;
-    let k = (t.to_bits().wrapping_sub(ROUND_MAGIC.to_bits()) as i64) + i64::from(r < x);
-    k as usize
 }
 
 /// Offspring boundary of particle `j` under systematic resampling: the number of points

@@ -11,6 +11,7 @@
 //! filtering", ISPA 2005.
 
 mod multinomial;
+mod offspring;
 mod residual;
 mod stratified;
 mod systematic;

@@ -40,6 +40,26 @@ pub(crate) fn exp_nonpositive(x: f64) -> f64 {
     if x >= -708.0 { scaled } else { 0.0 }
 }
 
+/// `⌈x⌉` for `−1 < x < 2⁵¹`, as an index, in float and integer operations that vectorise
+/// (no libm call, no float-to-integer conversion, which AVX2 lacks for 64-bit integers).
+#[inline(always)]
+pub(crate) fn ceil_index(x: f64) -> usize {
+    // t = ROUND_MAGIC + round(x) exactly, and round(x) sits in t's low significand bits.
+    let t = x + ROUND_MAGIC;
+    let r = t - ROUND_MAGIC;
+    ((t.to_bits().wrapping_sub(ROUND_MAGIC.to_bits()) as i64) + i64::from(r < x)) as usize
+}
+
+/// `⌊x⌋` for `0 ≤ x < 2⁵¹`, as an index and as a double, vectorisable like [`ceil_index`].
+#[inline(always)]
+pub(crate) fn floor_index(x: f64) -> (usize, f64) {
+    let t = x + ROUND_MAGIC;
+    let r = t - ROUND_MAGIC;
+    let above = r > x;
+    let k = (t.to_bits().wrapping_sub(ROUND_MAGIC.to_bits()) as i64) - i64::from(above);
+    (k as usize, if above { r - 1.0 } else { r })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -66,6 +86,23 @@ mod tests {
             check(x);
         }
         assert!(worst <= 2.0 * f64::EPSILON, "max relative error {worst:e}");
+    }
+
+    #[test]
+    fn ceil_and_floor_match_std() {
+        for &x in &[
+            -0.999, -0.5, -0.0, 0.0, 0.2, 0.5, 1.0, 1.5, 2.5, 1.000_000_1, 41.5, 1e6, 1e15,
+        ] {
+            assert_eq!(ceil_index(x), x.ceil().max(0.0) as usize, "ceil {x}");
+            if x >= 0.0 {
+                let (k, f) = floor_index(x);
+                assert_eq!((k, f), (x.floor() as usize, x.floor()), "floor {x}");
+            }
+        }
+        for i in 0..10_000 {
+            let x = f64::from(i) * 0.37 - 0.9;
+            assert_eq!(ceil_index(x), x.ceil().max(0.0) as usize, "ceil {x}");
+        }
     }
 
     #[test]
