@@ -11,7 +11,11 @@ fn main() {
     let model = NoisyAr1::new(0.98, 0.2, 1.0).unwrap();
     let (_, ys) = model.simulate(steps - 1, &mut stream_rng(1, 0));
     let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
-    let cfg = BatchConfig { par: Par::Seq, chunk, ..BatchConfig::new(n, 2) };
+    let cfg = BatchConfig {
+        par: Par::Seq,
+        chunk,
+        ..BatchConfig::new(n, 2)
+    };
     let mut f = BatchBootstrap::new(model, cfg).unwrap();
     let mut best = f64::INFINITY;
     let reps: usize = args.get(4).map_or(5, |s| s.parse().unwrap());
@@ -22,5 +26,8 @@ fn main() {
         best = best.min(dt);
         std::hint::black_box(ll);
     }
-    println!("N={n} steps={steps} chunk={chunk}: {:.3} ns/particle-step (best of {reps})", best * 1e9 / (n * steps) as f64);
+    println!(
+        "N={n} steps={steps} chunk={chunk}: {:.3} ns/particle-step (best of {reps})",
+        best * 1e9 / (n * steps) as f64
+    );
 }

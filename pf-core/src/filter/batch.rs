@@ -547,18 +547,21 @@ fn chunk_step<M: ScalarModel>(
     let mut blocks = l.chunks_exact(4);
     for b in &mut blocks {
         for k in 0..4 {
-            bad |= !(b[k] < f64::INFINITY);
+            bad |= b[k].is_nan() | (b[k] == f64::INFINITY);
             m4[k] = if b[k] > m4[k] { b[k] } else { m4[k] };
         }
     }
     for &v in blocks.remainder() {
-        bad |= !(v < f64::INFINITY);
+        bad |= v.is_nan() | (v == f64::INFINITY);
         m4[0] = if v > m4[0] { v } else { m4[0] };
     }
     let max_of = |a: f64, b: f64| if b > a { b } else { a };
     let m = max_of(max_of(m4[0], m4[1]), max_of(m4[2], m4[3]));
     if bad {
-        let p = l.iter().position(|v| !(*v < f64::INFINITY)).unwrap_or(0);
+        let p = l
+            .iter()
+            .position(|v| v.is_nan() || *v == f64::INFINITY)
+            .unwrap_or(0);
         return ChunkStat {
             bad: Some((lo + p, l[p])),
             ..ChunkStat::default()
@@ -802,7 +805,7 @@ mod tests {
                 let mut j = 0;
                 let merge: Vec<usize> = (0..n)
                     .map(|i| {
-                        while j + 1 < n && !((i as f64) < pos[j] - u) {
+                        while j + 1 < n && (i as f64) >= pos[j] - u {
                             j += 1;
                         }
                         j
@@ -866,7 +869,11 @@ mod tests {
             }
             fn log_likelihood_scalar(&self, _t: usize, x: f64, _y: f64) -> f64 {
                 // Particle states are distinct, so tag particle `self.0` by its state.
-                if x.to_bits() == self.0 as u64 { f64::NAN } else { -x * x }
+                if x.to_bits() == self.0 as u64 {
+                    f64::NAN
+                } else {
+                    -x * x
+                }
             }
         }
         let cfg = BatchConfig {

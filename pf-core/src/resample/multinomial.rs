@@ -161,7 +161,7 @@ mod tests {
                     .iter()
                     .map(|&si| {
                         // First j whose key C_j·S_M exceeds the point.
-                        while j + 1 < n && !(si < c[j] * total) {
+                        while j + 1 < n && si >= c[j] * total {
                             j += 1;
                         }
                         j

@@ -66,7 +66,7 @@ mod tests {
                 let merge: Vec<usize> = (0..m)
                     .map(|i| {
                         // First j with i < M·C_j − U (the boundary's own arithmetic).
-                        while j + 1 < w.len() && !((i as f64) < m as f64 * c[j] - u) {
+                        while j + 1 < w.len() && (i as f64) >= m as f64 * c[j] - u {
                             j += 1;
                         }
                         j

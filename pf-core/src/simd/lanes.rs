@@ -69,6 +69,7 @@ impl LaneRng {
 
     /// One lock-step xoshiro256++ step: one output per lane.
     #[inline(always)]
+    #[allow(clippy::manual_rotate)] // `rotate_left` was lowered to scalar `rol`s here
     fn step(&mut self) -> [u64; LANES] {
         let [s0, s1, s2, s3] = &mut self.s;
         let mut out = [0u64; LANES];
@@ -88,8 +89,8 @@ impl LaneRng {
     }
 
     /// Fill `out` (length a multiple of [`LANES`]) with raw 64-bit draws.
-    #[inline(always)]
-    pub(crate) fn fill_bits(&mut self, out: &mut [u64]) {
+    #[cfg(test)]
+    fn fill_bits(&mut self, out: &mut [u64]) {
         debug_assert_eq!(out.len() % LANES, 0);
         for block in out.chunks_exact_mut(LANES) {
             block.copy_from_slice(&self.step());
@@ -322,8 +323,14 @@ mod tests {
         let var = z.iter().map(|v| v * v).sum::<f64>() / mf;
         let m4 = z.iter().map(|v| v.powi(4)).sum::<f64>() / mf;
         assert!(mean.abs() < 5.0 / mf.sqrt(), "mean {mean}");
-        assert!((var - 1.0).abs() < 5.0 * (2.0 / mf).sqrt(), "variance {var}");
-        assert!((m4 - 3.0).abs() < 5.0 * (96.0 / mf).sqrt(), "fourth moment {m4}");
+        assert!(
+            (var - 1.0).abs() < 5.0 * (2.0 / mf).sqrt(),
+            "variance {var}"
+        );
+        assert!(
+            (m4 - 3.0).abs() < 5.0 * (96.0 / mf).sqrt(),
+            "fourth moment {m4}"
+        );
         // P(|Z| > c) for c = 1, 2, 3, R (the ziggurat's tail start), 4.
         for (c, p) in [
             (1.0, 0.317_310_507_862_914_15),
@@ -334,11 +341,18 @@ mod tests {
         ] {
             let k = z.iter().filter(|v| v.abs() > c).count() as f64;
             let se = (mf * p * (1.0 - p)).sqrt();
-            assert!((k - mf * p).abs() < 5.0 * se, "P(|Z| > {c}): {k} vs {}", mf * p);
+            assert!(
+                (k - mf * p).abs() < 5.0 * se,
+                "P(|Z| > {c}): {k} vs {}",
+                mf * p
+            );
         }
         // Symmetry: as many positive as negative values.
         let pos = z.iter().filter(|v| **v > 0.0).count() as f64;
-        assert!((pos - mf / 2.0).abs() < 5.0 * (mf / 4.0).sqrt(), "positives {pos}");
+        assert!(
+            (pos - mf / 2.0).abs() < 5.0 * (mf / 4.0).sqrt(),
+            "positives {pos}"
+        );
     }
 
     /// Exponentials: mean 1 (se 1/√m), variance 1 (se √(8/m): Var (E−1)² = 8), and
@@ -353,12 +367,19 @@ mod tests {
         let mean = e.iter().sum::<f64>() / mf;
         let var = e.iter().map(|v| (v - 1.0).powi(2)).sum::<f64>() / mf;
         assert!((mean - 1.0).abs() < 5.0 / mf.sqrt(), "mean {mean}");
-        assert!((var - 1.0).abs() < 5.0 * (8.0 / mf).sqrt(), "variance {var}");
+        assert!(
+            (var - 1.0).abs() < 5.0 * (8.0 / mf).sqrt(),
+            "variance {var}"
+        );
         for c in [0.1, 1.0, 3.0, EXP_R, 9.0] {
             let p = (-c).exp();
             let k = e.iter().filter(|v| **v > c).count() as f64;
             let se = (mf * p * (1.0 - p)).sqrt();
-            assert!((k - mf * p).abs() < 5.0 * se, "P(E > {c}): {k} vs {}", mf * p);
+            assert!(
+                (k - mf * p).abs() < 5.0 * se,
+                "P(E > {c}): {k} vs {}",
+                mf * p
+            );
         }
     }
 }
