@@ -8,7 +8,7 @@
 //! 1. finds its ancestors (systematic resampling: it counts offspring against the previous
 //!    step's cumulative weights, so chunks need nothing from each other; the other schemes
 //!    run on one thread before the pass and the chunk reads their ancestors);
-//! 2. draws its standard normals from its own [`LaneRng`] (eight xoshiro256++ lanes and a
+//! 2. draws its standard normals from its own [`LaneRng`] (64 xoshiro256++ lanes and a
 //!    vectorised ziggurat);
 //! 3. gathers, propagates and weighs, and takes the chunk's maximum log-weight;
 //! 4. exponentiates relative to that chunk maximum (a branch-free `exp`) and accumulates
@@ -681,15 +681,17 @@ fn systematic_gather<M>(ctx: &StepCtx<'_, M>, u: f64, lo: usize, len: usize, out
                 // The last particle's boundary is N (the clamp).
                 kb[m - 1] = len;
             }
+            // Past the chunk's end, boundaries are capped at `len`, so further particles
+            // only write into the padding: the end is checked once per block.
             for (&k, &x) in kb[..m].iter().zip(&ctx.x_old[j..j + m]) {
                 out[pos..pos + PAD].copy_from_slice(&[x; PAD]);
                 if k > pos + PAD {
                     out[pos + PAD..k].fill(x);
                 }
                 pos = pos.max(k);
-                if pos >= len {
-                    break 'walk;
-                }
+            }
+            if pos >= len {
+                break 'walk;
             }
             j += m;
         }

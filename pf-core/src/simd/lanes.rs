@@ -1,4 +1,4 @@
-//! [`LaneRng`]: eight xoshiro256++ generators in lock-step, and vectorised ziggurat samplers
+//! [`LaneRng`]: 64 xoshiro256++ generators in lock-step, and vectorised ziggurat samplers
 //! on top of them.
 
 use super::tables::{EXP_F, EXP_R, EXP_X, NORM_F, NORM_R, NORM_X};
@@ -7,7 +7,7 @@ use crate::mc::PfRng;
 use rand::{Rng, RngExt, SeedableRng};
 use rand_distr::Open01;
 
-/// Number of xoshiro256++ lanes stepped together (two AVX2 registers per state word).
+/// Number of xoshiro256++ lanes stepped together (sixteen AVX2 registers per state word).
 pub const LANES: usize = 64;
 
 /// Draws produced per inner block of the samplers (a multiple of [`LANES`]): the raw bits of
@@ -17,10 +17,12 @@ const BLOCK: usize = 256;
 /// A vectorisable random stream: [`LANES`] independent xoshiro256++ generators stepped in
 /// lock-step, plus one scalar xoshiro256++ stream for the rare ziggurat rejections.
 ///
-/// - **Raw bits.** Draw `p` of the stream is output `⌊p / 8⌋` of lane `p mod 8`: each lane is
-///   exactly `rand`'s `Xoshiro256PlusPlus` (tested), whose step is adds, xors and shifts only,
-///   so eight of them run as a handful of AVX2 integer instructions.
-/// - **Seeding.** [`LaneRng::from_rng`] takes 32 outputs of a generator as the lanes' 256-bit
+/// - **Raw bits.** Draw `p` of the stream is output `⌊p / 64⌋` of lane `p mod 64`: each lane
+///   is exactly `rand`'s `Xoshiro256PlusPlus` (tested), whose step is adds, xors and shifts
+///   only, so 64 of them step as 16 AVX2 registers' worth of integer instructions. (64
+///   rather than 4 or 8: with fewer lanes LLVM fully unrolls the step and then keeps one of
+///   its rotations in scalar registers.)
+/// - **Seeding.** [`LaneRng::from_rng`] takes 256 outputs of a generator as the lanes' 256-bit
 ///   states (lane `l` gets outputs `4l … 4l+3`) and 4 more as the fix-up stream's state.
 ///   The engine seeds it from [`stream_rng`](crate::mc::stream_rng)`(seed, r)`, so all
 ///   seeding stays explicit.
@@ -32,7 +34,7 @@ const BLOCK: usize = 256;
 ///   its extra uniforms from the fix-up stream, so every value is an exact draw from the
 ///   target law and values in distinct slots are independent.
 ///
-/// A call that fills `m` values consumes `⌈m / 8⌉` lane steps (a partial last step is
+/// A call that fills `m` values consumes `⌈m / 64⌉` lane steps (a partial last step is
 /// discarded), so the values depend on how a stream is cut into calls, never on the thread
 /// that runs them or on the instruction set.
 #[derive(Debug, Clone)]
@@ -45,7 +47,7 @@ pub struct LaneRng {
 }
 
 impl LaneRng {
-    /// Seed the lanes and the fix-up stream from 36 outputs of `rng`.
+    /// Seed the lanes and the fix-up stream from `4·LANES + 4` outputs of `rng`.
     pub fn from_rng<R: Rng + ?Sized>(rng: &mut R) -> Self {
         let mut s = [[0u64; LANES]; 4];
         for l in 0..LANES {

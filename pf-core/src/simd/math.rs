@@ -24,8 +24,10 @@ const P5: f64 = 4.138_136_797_057_238_460_39e-8;
 pub(crate) const ROUND_MAGIC: f64 = 6_755_399_441_055_744.0;
 
 /// `e^x` for `x ≤ 0` (`−∞` included), branch-free; 0 below −708. See the module docs.
+///
+/// A NaN argument gives an unspecified value (the filter rejects NaN weights before).
 #[inline(always)]
-pub(crate) fn exp_nonpositive(x: f64) -> f64 {
+pub fn exp_nonpositive(x: f64) -> f64 {
     // k = round(x / ln 2) by the magic-number trick (no `round`, which is a libm call on
     // baseline x86-64); kf is k as a double, k_bits its two's complement in the low bits.
     let t = x * std::f64::consts::LOG2_E + ROUND_MAGIC;

@@ -11,7 +11,7 @@
 //! makes them faster. [`Simd::Portable`] forces the portable path.
 
 mod lanes;
-pub(crate) mod math;
+pub mod math;
 mod tables;
 
 pub use lanes::{LANES, LaneRng};
