@@ -1,7 +1,7 @@
 //! Multinomial resampling in O(N) through sorted uniforms generated in order.
 
 use super::Resample;
-use super::offspring::{Runs, SCAN, prefix4, walk};
+use super::offspring::{SCAN, prefix4, walk};
 use crate::simd::math::floor_index;
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::Rng;
@@ -44,7 +44,8 @@ thread_local! {
 ///
 /// 1. `S_0 … S_M`: unit exponentials from a [`LaneRng`] seeded by `rng`, summed ([`prefix4`]).
 /// 2. The bucket of a value `v ∈ [0, S_M]` is `b(v) = ⌊v·M/S_M⌋` (capped at `M`);
-///    `first[b] = #{i < M : b(S_i) < b}` for `b = 0 … M`, written as runs.
+///    `first[b] = #{i < M : b(S_i) < b}` for `b = 0 … M`, from a histogram of the points'
+///    buckets and its prefix sums.
 /// 3. Particle `j`'s boundary, the number of points below `key_j = C_j·S_M`, is
 ///    `first[b(key_j)]` plus the points of that bucket below `key_j` (since `b` is
 ///    monotone, points in lower buckets are below and points in higher buckets are not).
@@ -65,7 +66,7 @@ pub(crate) fn sorted_draws<R: Rng + ?Sized>(
         let mut guard = cell.borrow_mut();
         let (s, first) = &mut *guard;
         s.resize(m + 1 + PAD, 0.0);
-        first.resize(m + 1, 0);
+        first.resize(m + 2, 0);
         dispatch(
             simd,
             #[inline(always)]
@@ -74,24 +75,23 @@ pub(crate) fn sorted_draws<R: Rng + ?Sized>(
                 s[m + 1..].fill(f64::INFINITY);
                 let g = m as f64 / total;
                 let bucket = |v: f64| floor_index(v * g).0.min(m);
-                // first[b]: point i covers buckets b(S_{i−1}) + 1 … b(S_i); the points are
-                // walked SCAN at a time, their buckets computed in a vectorised loop.
-                let mut runs = Runs::new();
+                // first[b]: a histogram of the points' buckets (shifted by one), then its
+                // prefix sums. The buckets are computed SCAN at a time (vectorised).
+                first.fill(0);
                 let mut kb = [0usize; SCAN];
-                let mut i0 = 0;
-                'points: while i0 < m {
-                    let len = (m - i0).min(SCAN);
-                    for (k, &v) in kb[..len].iter_mut().zip(&s[i0..i0 + len]) {
+                for block in s[..m].chunks(SCAN) {
+                    for (k, &v) in kb.iter_mut().zip(block) {
                         *k = bucket(v) + 1;
                     }
-                    for (q, &k) in kb[..len].iter().enumerate() {
-                        if runs.push(first, i0 + q, k) {
-                            break 'points;
-                        }
+                    for &k in &kb[..block.len()] {
+                        first[k] += 1;
                     }
-                    i0 += len;
                 }
-                runs.push(first, m, m + 1);
+                let mut acc = 0;
+                for f in first.iter_mut() {
+                    acc += *f;
+                    *f = acc;
+                }
                 let (s, first) = (&s[..], &first[..]);
                 walk(
                     n,
