@@ -11,7 +11,7 @@ use rand::{Rng, RngExt};
 /// Instead of merging the `u_i` against the cumulative weights (a loop whose branch is
 /// mispredicted about once per particle), it counts each particle's offspring directly:
 /// `#{i : u_i < C_j} = ⌈M·C_j − U⌉`, so particle `j` gets `⌈M·C_j − U⌉ − ⌈M·C_{j−1} − U⌉`
-/// copies, written as one run (see [`offspring`](super::offspring)). The last count is
+/// copies, written as one run of copies. The last count is
 /// forced so that the total is exactly `M`, which is the clamp that keeps rounding from
 /// running past the end.
 #[derive(Debug, Clone, Copy, Default)]

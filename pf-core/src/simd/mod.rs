@@ -2,7 +2,7 @@
 //! exponentials, and a branch-free `exp`, with run-time CPU dispatch.
 //!
 //! Every kernel is plain Rust written so that LLVM can vectorise it (fixed-width lanes,
-//! selects instead of branches, no `mul_add`). [`dispatch`] compiles it twice: once for the
+//! selects instead of branches, no `mul_add`). `dispatch` compiles it twice: once for the
 //! baseline target, and once inside a function with `#[target_feature(enable = "avx2")]`,
 //! chosen at run time when the CPU has AVX2. Both copies perform the same IEEE-754
 //! operations in the same order (Rust never contracts `a * b + c` into a fused multiply-add,
