@@ -101,8 +101,11 @@ pub(crate) fn sorted_draws<R: Rng + ?Sized>(
                             let key = c * total;
                             let mut i = first[bucket(key)];
                             loop {
-                                let p = &s[i..i + PAD];
-                                let below = p.iter().filter(|&&v| v < key).count();
+                                let p: &[f64; PAD] = s[i..i + PAD].try_into().expect("PAD points");
+                                let below = usize::from(p[0] < key)
+                                    + usize::from(p[1] < key)
+                                    + usize::from(p[2] < key)
+                                    + usize::from(p[3] < key);
                                 i += below;
                                 if below < PAD {
                                     break;
