@@ -12,6 +12,7 @@
 //! | [`weights`] | the one log-sum-exp, normalisation and ESS |
 //! | [`particles`] | weighted means and covariances of a particle set |
 //! | [`resample`] | multinomial, systematic, stratified and residual schemes |
+//! | [`simd`] | lock-step random lanes, vectorised ziggurat normals, run-time AVX2 dispatch |
 //! | [`filter`] | the SIR filter, bootstrap and guided mutations, resampling policy |
 //! | [`genealogy`] | ancestry: trajectories, surviving lineages, coalescence |
 //! | [`ancestry`] | pruned path storage: living trajectories in far less than `N·n` |
@@ -36,6 +37,7 @@ pub mod models;
 pub mod observe;
 pub mod particles;
 pub mod resample;
+pub mod simd;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 pub mod weights;

@@ -1,0 +1,164 @@
+//! The machinery the fast schemes share: cumulative weights four at a time, offspring
+//! boundaries computed a block at a time, and ancestors written as runs of copies.
+//!
+//! Every scheme here resamples by **offspring counting**: particle `j` has a boundary `k_j`,
+//! the number of outputs whose point lies below its cumulative weight `C_j` (non-decreasing
+//! in `j`, and `k_{N−1} = M`, the clamp), so it fills outputs `k_{j−1} … k_j − 1`. Nothing
+//! merges two sorted sequences with a data-dependent branch (which the CPU mispredicts about
+//! once per particle). The ancestors are exactly those of the textbook inverse-CDF merge on
+//! the same cumulative weights and the same points (tested per scheme).
+//!
+//! The cumulative weights are summed in blocks of four with a fixed tree of additions
+//! (see [`prefix4`]), so only one addition per block waits for the previous block. They can
+//! therefore differ from a left-to-right sum by rounding (a few ulp), which moves an
+//! ancestor only when a point falls within those few ulp of a cumulative weight.
+
+/// Particles per block of boundaries.
+pub(crate) const SCAN: usize = 64;
+
+/// Slots written past a run's start by the unconditional vector store.
+const PAD: usize = 4;
+
+/// Cumulative sums of `w`, continuing from `carry`, into `out`; returns the last one.
+///
+/// In each block of four, `w₀, w₀+w₁, (w₀+w₁)+w₂, (w₀+w₁)+(w₂+w₃)` are added to the carry:
+/// the sums are non-decreasing for non-negative `w`, and the last one carries on.
+#[inline(always)]
+pub(crate) fn prefix4(w: &[f64], mut carry: f64, out: &mut [f64]) -> f64 {
+    let mut o4 = out.chunks_exact_mut(4);
+    let mut w4 = w.chunks_exact(4);
+    for (o, w) in (&mut o4).zip(&mut w4) {
+        let s01 = w[0] + w[1];
+        let s23 = w[2] + w[3];
+        o[0] = carry + w[0];
+        o[1] = carry + s01;
+        o[2] = carry + (s01 + w[2]);
+        o[3] = carry + (s01 + s23);
+        carry = o[3];
+    }
+    for (o, &w) in o4.into_remainder().iter_mut().zip(w4.remainder()) {
+        carry += w;
+        *o = carry;
+    }
+    carry
+}
+
+/// Where the next run of copies starts in an output buffer, and the writing of runs.
+pub(crate) struct Runs {
+    pos: usize,
+}
+
+impl Runs {
+    pub(crate) fn new() -> Self {
+        Runs { pos: 0 }
+    }
+
+    /// Write `value` into `out[pos .. k]` (nothing when `k ≤ pos`) and move to `k`. Four
+    /// copies go out with one vector store whatever the count; the next run overwrites the
+    /// surplus. Returns whether `out` is full.
+    #[inline(always)]
+    pub(crate) fn push(&mut self, out: &mut [usize], value: usize, k: usize) -> bool {
+        let m = out.len();
+        let (pos, k) = (self.pos, k.min(m));
+        if pos + PAD <= m {
+            out[pos..pos + PAD].copy_from_slice(&[value; PAD]);
+            if k > pos + PAD {
+                out[pos + PAD..k].fill(value);
+            }
+        } else if k > pos {
+            out[pos..k].fill(value);
+        }
+        self.pos = pos.max(k);
+        self.pos >= m
+    }
+}
+
+/// Offspring counting over `n` particles with weights `w(j)` into `out` (length `M`):
+/// blocks of [`SCAN`] particles get their cumulative weights ([`prefix4`]), then
+/// `boundaries(j₀, C, k)` turns the block's `C` into its boundaries `k` (a vectorisable
+/// loop for the arithmetic schemes), then the runs are written. The last particle's
+/// boundary is forced to `M`.
+#[inline(always)]
+pub(crate) fn walk<W, B>(n: usize, w: W, mut boundaries: B, out: &mut [usize])
+where
+    W: Fn(usize) -> f64,
+    B: FnMut(usize, &[f64], &mut [usize]),
+{
+    let m = out.len();
+    let mut wb = [0.0f64; SCAN];
+    let mut cb = [0.0f64; SCAN];
+    let mut kb = [0usize; SCAN];
+    let mut carry = 0.0;
+    let mut runs = Runs::new();
+    let mut j0 = 0;
+    while j0 < n {
+        let len = (n - j0).min(SCAN);
+        for (q, x) in wb[..len].iter_mut().enumerate() {
+            *x = w(j0 + q);
+        }
+        carry = prefix4(&wb[..len], carry, &mut cb[..len]);
+        boundaries(j0, &cb[..len], &mut kb[..len]);
+        if j0 + len == n {
+            kb[len - 1] = m;
+        }
+        for (q, &k) in kb[..len].iter().enumerate() {
+            if runs.push(out, j0 + q, k) {
+                return;
+            }
+        }
+        j0 += len;
+    }
+}
+
+/// The cumulative weights [`walk`] uses, for tests and reference merges.
+#[cfg(test)]
+pub(crate) fn cumulative(w: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; w.len()];
+    let mut carry = 0.0;
+    for (wb, ob) in w.chunks(SCAN).zip(out.chunks_mut(SCAN)) {
+        carry = prefix4(wb, carry, ob);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prefix4_is_monotone_and_close_to_the_plain_sum() {
+        let w: Vec<f64> = (0..1001).map(|i| ((i * 37) % 101) as f64 / 7.0).collect();
+        let c = cumulative(&w);
+        let mut plain = 0.0;
+        for (j, (&cj, &wj)) in c.iter().zip(&w).enumerate() {
+            plain += wj;
+            // Both sums carry at most a few roundings of magnitude ≤ the total per step.
+            assert!((cj - plain).abs() <= 1e-12 * plain.max(1.0), "{j}");
+            if j > 0 {
+                assert!(cj >= c[j - 1]);
+            }
+        }
+    }
+
+    #[test]
+    fn runs_fill_exactly() {
+        for m in 0..12 {
+            let mut out = vec![usize::MAX; m];
+            let mut runs = Runs::new();
+            // Boundaries 0, 0, 3, 3, 7, … , capped at m.
+            let ks = [0usize, 0, 3, 3, 7, 8, 8, 11, 20];
+            let mut full = false;
+            for (j, &k) in ks.iter().enumerate() {
+                full = runs.push(&mut out, j, k.min(m));
+                if full {
+                    break;
+                }
+            }
+            let want: Vec<usize> = (0..m)
+                .map(|i| ks.iter().position(|&k| k > i).unwrap())
+                .collect();
+            assert_eq!(out, want, "M = {m}");
+            assert!(full || m == 0 || m > 20);
+        }
+    }
+}

@@ -1,0 +1,64 @@
+//! Vectorised kernels: a lock-step multi-lane random generator, ziggurat normals and
+//! exponentials, and a branch-free `exp`, with run-time CPU dispatch.
+//!
+//! Every kernel is plain Rust written so that LLVM can vectorise it (fixed-width lanes,
+//! selects instead of branches, no `mul_add`). `dispatch` compiles it twice: once for the
+//! baseline target, and once inside a function with `#[target_feature(enable = "avx2")]`,
+//! chosen at run time when the CPU has AVX2. Both copies perform the same IEEE-754
+//! operations in the same order (Rust never contracts `a * b + c` into a fused multiply-add,
+//! and the kernels call no libm function whose result could depend on the instruction set),
+//! so **the AVX2 and the portable paths give bit-identical results** (tested); AVX2 only
+//! makes them faster. [`Simd::Portable`] forces the portable path.
+
+mod lanes;
+pub mod math;
+mod tables;
+
+pub use lanes::{LANES, LaneRng};
+
+/// Which compiled copy of the vectorised kernels runs. Both give the same numbers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Simd {
+    /// The AVX2 copy when the CPU has AVX2 (detected at run time), the portable one otherwise.
+    #[default]
+    Auto,
+    /// Always the portable copy (baseline x86-64: SSE2), for comparison and audits.
+    Portable,
+}
+
+/// Run `f`, compiled with AVX2 enabled when `simd` is [`Simd::Auto`] and the CPU has it.
+///
+/// `f` should be an `#[inline(always)]` closure whose helpers are `#[inline(always)]` too, so
+/// that its whole body is compiled inside the AVX2 function.
+#[inline]
+pub(crate) fn dispatch<R>(simd: Simd, f: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    if simd == Simd::Auto {
+        return avx2::run(f);
+    }
+    let _ = simd;
+    f()
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    /// `f` compiled with AVX2 enabled.
+    #[target_feature(enable = "avx2")]
+    fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
+        f()
+    }
+
+    /// The crate's one `unsafe` block: call the AVX2 copy only on a CPU that has AVX2.
+    #[allow(unsafe_code)]
+    #[inline]
+    pub(super) fn run<R>(f: impl FnOnce() -> R) -> R {
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: `with_avx2` is safe to call on any CPU that supports AVX2, and the
+            // run-time check just above established that this one does. The detection
+            // result is cached by std, so the check costs one atomic load.
+            unsafe { with_avx2(f) }
+        } else {
+            f()
+        }
+    }
+}
