@@ -1,7 +1,7 @@
 //! [`LaneRng`]: 64 xoshiro256++ generators in lock-step, and vectorised ziggurat samplers
 //! on top of them.
 
-use super::tables::{EXP_F, EXP_R, EXP_X, NORM_F, NORM_R, NORM_X};
+use super::tables::{EXPONENTIAL, NORMAL, Ziggurat};
 use super::{Simd, dispatch};
 use crate::mc::PfRng;
 use rand::{Rng, RngExt, SeedableRng};
@@ -26,11 +26,12 @@ const BLOCK: usize = 256;
 ///   states (lane `l` gets outputs `4l … 4l+3`) and 4 more as the fix-up stream's state.
 ///   The engine seeds it from [`stream_rng`](crate::mc::stream_rng)`(seed, r)`, so all
 ///   seeding stays explicit.
-/// - **Normals and exponentials** come from the ziggurat of Marsaglia & Tsang (2000) with
-///   `rand_distr`'s 256-layer tables: one 64-bit draw per candidate (8 bits for the layer,
-///   52 for the uniform), accepted inside the layer's rectangle (about 99 % of the time) by
-///   a branch-free vectorised pass. A rejected candidate continues exactly as in
-///   `rand_distr`'s ziggurat (wedge test, or tail for layer 0, then fresh candidates), with
+/// - **Normals and exponentials** come from the ziggurat of Marsaglia & Tsang (2000) in
+///   `rand_distr`'s layout (256 layers, tables built at first use in `tables`): one 64-bit
+///   draw per candidate (8 bits for the layer, 52 for the uniform), accepted inside the
+///   layer's rectangle (about 99 % of the time) by a branch-free vectorised pass. A rejected
+///   candidate continues as `rand_distr`'s ziggurat does (wedge test, or tail for layer 0,
+///   then fresh candidates), with
 ///   its extra uniforms from the fix-up stream, so every value is an exact draw from the
 ///   target law and values in distinct slots are independent.
 ///
@@ -130,13 +131,25 @@ impl LaneRng {
     /// The normal sampler's body, for callers already inside a dispatched kernel.
     #[inline(always)]
     pub(crate) fn fill_normal_inline(&mut self, out: &mut [f64]) {
-        self.fill_ziggurat(out, normal_candidate, normal_continue);
+        let z: &Ziggurat = &NORMAL;
+        self.fill_ziggurat(
+            out,
+            #[inline(always)]
+            |b| normal_candidate(z, b),
+            |b, rng| normal_continue(z, b, rng),
+        );
     }
 
     /// The exponential sampler's body, for callers already inside a dispatched kernel.
     #[inline(always)]
     pub(crate) fn fill_exp1_inline(&mut self, out: &mut [f64]) {
-        self.fill_ziggurat(out, exp1_candidate, exp1_continue);
+        let z: &Ziggurat = &EXPONENTIAL;
+        self.fill_ziggurat(
+            out,
+            #[inline(always)]
+            |b| exp1_candidate(z, b),
+            |b, rng| exp1_continue(z, b, rng),
+        );
     }
 
     /// Blocks of [`BLOCK`] values: each lane step's draws become candidates at once (NaN
@@ -199,27 +212,27 @@ fn exp1_parts(b: u64) -> (usize, f64) {
 
 /// The candidate `u·X[i]` if it lies inside layer `i`'s rectangle, NaN (a marker) otherwise.
 #[inline(always)]
-fn normal_candidate(b: u64) -> f64 {
+fn normal_candidate(z: &Ziggurat, b: u64) -> f64 {
     let (i, u) = normal_parts(b);
-    let x = u * NORM_X[i];
-    if x.abs() < NORM_X[i + 1] { x } else { f64::NAN }
+    let x = u * z.x[i];
+    if x.abs() < z.x[i + 1] { x } else { f64::NAN }
 }
 
 #[inline(always)]
-fn exp1_candidate(b: u64) -> f64 {
+fn exp1_candidate(z: &Ziggurat, b: u64) -> f64 {
     let (i, u) = exp1_parts(b);
-    let x = u * EXP_X[i];
-    if x < EXP_X[i + 1] { x } else { f64::NAN }
+    let x = u * z.x[i];
+    if x < z.x[i + 1] { x } else { f64::NAN }
 }
 
-/// `rand_distr`'s ziggurat for the standard normal, started from the 64-bit draw `b`, with
+/// The ziggurat for the standard normal (as in `rand_distr`), started from the 64-bit draw `b`, with
 /// further uniforms from `rng`.
 #[cold]
-fn normal_continue(mut b: u64, rng: &mut PfRng) -> f64 {
+fn normal_continue(z: &Ziggurat, mut b: u64, rng: &mut PfRng) -> f64 {
     loop {
         let (i, u) = normal_parts(b);
-        let x = u * NORM_X[i];
-        if x.abs() < NORM_X[i + 1] {
+        let x = u * z.x[i];
+        if x.abs() < z.x[i + 1] {
             return x;
         }
         if i == 0 {
@@ -227,34 +240,33 @@ fn normal_continue(mut b: u64, rng: &mut PfRng) -> f64 {
             let (mut x, mut y) = (1.0f64, 0.0f64);
             while -2.0 * y < x * x {
                 let (a, c): (f64, f64) = (rng.sample(Open01), rng.sample(Open01));
-                x = a.ln() / NORM_R;
+                x = a.ln() / z.r;
                 y = c.ln();
             }
-            return if u < 0.0 { x - NORM_R } else { NORM_R - x };
+            return if u < 0.0 { x - z.r } else { z.r - x };
         }
-        if NORM_F[i + 1] + (NORM_F[i] - NORM_F[i + 1]) * rng.random::<f64>() < (-x * x / 2.0).exp()
-        {
+        if z.f[i + 1] + (z.f[i] - z.f[i + 1]) * rng.random::<f64>() < (-x * x / 2.0).exp() {
             return x;
         }
         b = rng.next_u64();
     }
 }
 
-/// `rand_distr`'s ziggurat for the unit exponential, started from the 64-bit draw `b`.
+/// The ziggurat for the unit exponential (as in `rand_distr`), started from the 64-bit draw `b`.
 #[cold]
-fn exp1_continue(mut b: u64, rng: &mut PfRng) -> f64 {
+fn exp1_continue(z: &Ziggurat, mut b: u64, rng: &mut PfRng) -> f64 {
     loop {
         let (i, u) = exp1_parts(b);
-        let x = u * EXP_X[i];
-        if x < EXP_X[i + 1] {
+        let x = u * z.x[i];
+        if x < z.x[i + 1] {
             return x;
         }
         if i == 0 {
             // Memoryless tail: R + Exp(1).
             let a: f64 = rng.sample(Open01);
-            return EXP_R - a.ln();
+            return z.r - a.ln();
         }
-        if EXP_F[i + 1] + (EXP_F[i] - EXP_F[i + 1]) * rng.random::<f64>() < (-x).exp() {
+        if z.f[i + 1] + (z.f[i] - z.f[i + 1]) * rng.random::<f64>() < (-x).exp() {
             return x;
         }
         b = rng.next_u64();
@@ -338,7 +350,7 @@ mod tests {
             (1.0, 0.317_310_507_862_914_15),
             (2.0, 0.045_500_263_896_358_4),
             (3.0, 0.002_699_796_063_260_2),
-            (NORM_R, 2.580_324_876_539_013e-4),
+            (NORMAL.r, 2.580_324_876_539_013e-4),
             (4.0, 6.334_248_366_623_996e-5),
         ] {
             let k = z.iter().filter(|v| v.abs() > c).count() as f64;
@@ -373,7 +385,7 @@ mod tests {
             (var - 1.0).abs() < 5.0 * (8.0 / mf).sqrt(),
             "variance {var}"
         );
-        for c in [0.1, 1.0, 3.0, EXP_R, 9.0] {
+        for c in [0.1, 1.0, 3.0, EXPONENTIAL.r, 9.0] {
             let p = (-c).exp();
             let k = e.iter().filter(|v| **v > c).count() as f64;
             let se = (mf * p * (1.0 - p)).sqrt();
