@@ -1,6 +1,10 @@
 //! The library crates must never pull rerun, plotters or clap: users who depend on one paper
 //! crate get the algorithm and the engine, not the drawing stack. Checked from
 //! `cargo metadata`'s resolved graph, following normal (non-dev, non-build) edges only.
+//!
+//! The graph is filtered to the host platform: offline, `cargo metadata` can only read the
+//! manifests of crates already downloaded, and a build downloads only the host's (the
+//! forbidden crates are not platform-specific, so the check loses nothing).
 
 use serde_json::Value;
 use std::collections::{BTreeSet, HashMap};
@@ -8,10 +12,30 @@ use std::process::Command;
 
 const FORBIDDEN: [&str; 3] = ["rerun", "plotters", "clap"];
 
+/// The host's target triple, from `rustc -vV`.
+fn host() -> String {
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let out = Command::new(rustc)
+        .arg("-vV")
+        .output()
+        .expect("rustc -vV runs");
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .find_map(|l| l.strip_prefix("host: ").map(str::to_owned))
+        .expect("rustc -vV names the host")
+}
+
 fn metadata() -> Value {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let out = Command::new(cargo)
-        .args(["metadata", "--format-version", "1", "--offline"])
+        .args([
+            "metadata",
+            "--format-version",
+            "1",
+            "--offline",
+            "--filter-platform",
+        ])
+        .arg(host())
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .expect("cargo metadata runs");
