@@ -30,7 +30,7 @@
 use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
-use crate::resample::{Resample, Resampler};
+use crate::resample::{Resample, Resampler, prefix4};
 use crate::simd::math::{ceil_index, exp_nonpositive};
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::RngExt;
@@ -570,38 +570,27 @@ fn chunk_step<M: ScalarModel>(
     if ctx.keep_lw {
         lws.copy_from_slice(l);
     }
-    // Weights relative to the chunk maximum (an all-zero chunk keeps zeros), then their
-    // cumulative sums in blocks of four: within a block a fixed tree of additions, so that
-    // only one addition per block waits for the previous one.
+    // Weights relative to the chunk maximum (an all-zero chunk keeps zeros), their
+    // cumulative sums (the resamplers' `prefix4`), and their squares four lanes at a time.
     let shift = if m == f64::NEG_INFINITY { 0.0 } else { m };
     for v in l.iter_mut() {
         *v = exp_nonpositive(*v - shift);
     }
-    let mut carry = 0.0;
+    let sum = prefix4(l, 0.0, cws);
     let mut sq4 = [0.0; 4];
-    let mut out = cws.chunks_exact_mut(4);
     let mut ws = l.chunks_exact(4);
-    for (o, w) in (&mut out).zip(&mut ws) {
+    for w in &mut ws {
         for k in 0..4 {
             sq4[k] += w[k] * w[k];
         }
-        let s01 = w[0] + w[1];
-        let s23 = w[2] + w[3];
-        o[0] = carry + w[0];
-        o[1] = carry + s01;
-        o[2] = carry + (s01 + w[2]);
-        o[3] = carry + (s01 + s23);
-        carry = o[3];
     }
-    for (o, &w) in out.into_remainder().iter_mut().zip(ws.remainder()) {
+    for &w in ws.remainder() {
         sq4[0] += w * w;
-        carry += w;
-        *o = carry;
     }
     ChunkStat {
         max: m,
         bad: None,
-        sum: carry,
+        sum,
         sum_sq: (sq4[0] + sq4[1]) + (sq4[2] + sq4[3]),
     }
 }

@@ -30,6 +30,8 @@ pub use residual::Residual;
 pub use stratified::Stratified;
 pub use systematic::Systematic;
 
+pub(crate) use offspring::prefix4;
+
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
