@@ -35,16 +35,10 @@ fn main() -> Result<(), HomotopyError> {
         let real = sc.simulate(rng)?;
         let (obs, ys) = (&real.observer, &real.bearings);
         let g0 = gaussian_prior(&sc.prior, ys[0], sc.sigma(), obs[0].pos);
-        let mut u = ukf_lpc::UkfLpc::from_cartesian(&sc, set.ukf, g0.mean, g0.cov, &obs[0])?;
-        let mut from_cart = Vec::with_capacity(ys.len());
-        for k in 0..ys.len() {
-            if k > 0 {
-                u.predict(&obs[k - 1], &obs[k])?;
-                u.update(ys[k])?;
-            }
-            let m = u.cartesian_mean(&obs[k])?;
-            from_cart.push([m[0], m[1]]);
-        }
+        let from_cart = ukf_lpc::run_from(
+            ukf_lpc::UkfLpc::from_cartesian(&sc, set.ukf, g0.mean, g0.cov, &obs[0])?,
+            &real,
+        )?;
         let est = [
             ukf_lpc::run(&sc, set.ukf, &real)?,
             from_cart,

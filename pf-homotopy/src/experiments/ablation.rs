@@ -10,6 +10,7 @@ use crate::error::{HomotopyError, Result};
 use crate::filters::{Algorithm, FilterSettings};
 use crate::model::ScenarioConfig;
 use crate::ohf::OhfConfig;
+use pf_core::mc::mean_and_se;
 
 /// Settings of the ablation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -99,7 +100,7 @@ fn final_rmse(cfg: &RmseConfig, setting: &str, failures: &mut Vec<String>) -> [O
     let mut out = [None; 2];
     for (o, alg) in out.iter_mut().zip([Algorithm::Ohf, Algorithm::Aohf]) {
         match final_squared_errors(cfg, &[alg]) {
-            Ok(sq) => *o = Some((sq[0].iter().sum::<f64>() / sq[0].len() as f64).sqrt()),
+            Ok(sq) => *o = Some(mean_and_se(&sq[0]).0.sqrt()),
             Err(e) => failures.push(format!("{} with {setting}: {e}", alg.name())),
         }
     }
@@ -139,7 +140,7 @@ pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
     let mut direct = base.clone();
     direct.filters.ohf = OhfConfig::direct();
     let sq = final_squared_errors(&direct, &[Algorithm::Ohf])?;
-    res.ohf_limit = (sq[0].iter().sum::<f64>() / sq[0].len() as f64).sqrt();
+    res.ohf_limit = mean_and_se(&sq[0]).0.sqrt();
     for &[nb, nr] in &cfg.grids {
         let mut c = base.clone();
         c.filters.grid.n_bearing = nb;

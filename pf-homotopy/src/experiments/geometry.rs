@@ -13,21 +13,16 @@ use serde::{Deserialize, Serialize};
 use super::Scale;
 use super::rmse::{PerAlgorithm, RmseConfig, final_squared_errors};
 use crate::error::{HomotopyError, Result};
-use crate::filters::{Algorithm, FilterSettings};
+use crate::filters::Algorithm;
 use crate::model::ScenarioConfig;
 
 /// Settings of the sweep.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GeometryConfig {
-    /// The base scenario; each cell overrides the turn rate and σ.
-    pub scenario: ScenarioConfig,
-    /// The filters.
-    pub filters: FilterSettings,
-    /// Realisations per cell (the same seeds in every cell).
-    pub realisations: usize,
-    /// Seed.
-    pub seed: u64,
+    /// Scenario, filters, realisations per cell (the same seeds in every cell) and seed;
+    /// each cell overrides the turn rate and σ.
+    pub base: RmseConfig,
     /// Turn rates to try, degrees/s, counter-clockwise positive.
     pub turn_rates_deg: Vec<f64>,
     /// Bearing noise standard deviations to try, degrees.
@@ -35,22 +30,21 @@ pub struct GeometryConfig {
 }
 
 impl GeometryConfig {
-    /// Size presets: quick 4 realisations (PF N = 2000), default 24 (N = 10 000), full 100
-    /// (N = 100 000, about 12 minutes on two cores); both turn directions at σ = ½°, 1°, 2°.
+    /// Fig. 3's presets ([`RmseConfig::at_scale`]) with fewer realisations per cell: quick 4,
+    /// default 24, full 100 (about 12 minutes on two cores); both turn directions at
+    /// σ = ½°, 1°, 2°.
     pub fn at_scale(scale: Scale) -> Self {
-        let (realisations, particles) = match scale {
-            Scale::Quick => (4, 2_000),
-            Scale::Default => (24, 10_000),
-            Scale::Full => (100, 100_000),
+        let realisations = match scale {
+            Scale::Quick => 4,
+            Scale::Default => 24,
+            Scale::Full => 100,
         };
         Self {
-            scenario: ScenarioConfig::default(),
-            filters: FilterSettings {
-                particles,
-                ..FilterSettings::default()
+            base: RmseConfig {
+                realisations,
+                seed: 2,
+                ..RmseConfig::at_scale(scale)
             },
-            realisations,
-            seed: 2,
             turn_rates_deg: vec![-30.0, 30.0],
             sigmas_deg: vec![0.5, 1.0, 2.0],
         }
@@ -77,11 +71,9 @@ impl GeometryConfig {
                 scenario: ScenarioConfig {
                     turn_rate_deg: turn,
                     sigma_deg: sigma,
-                    ..self.scenario
+                    ..self.base.scenario
                 },
-                filters: self.filters,
-                realisations: self.realisations,
-                seed: self.seed,
+                ..self.base.clone()
             })
         })
     }

@@ -276,8 +276,17 @@ pub fn run(
     params: UkfParams,
     real: &Realisation,
 ) -> Result<Vec<[f64; 2]>> {
+    let f = UkfLpc::new(scenario, params, real.bearings[0], &real.observer[0])?;
+    run_from(f, real)
+}
+
+/// Filter a realisation from an initialised tracker `f` (its belief at `k = 1`, e.g. from
+/// [`UkfLpc::from_cartesian`]); position means at `k = 1, …, K`.
+///
+/// # Errors
+/// As [`UkfLpc::predict`], [`UkfLpc::update`].
+pub fn run_from(mut f: UkfLpc, real: &Realisation) -> Result<Vec<[f64; 2]>> {
     let obs = &real.observer;
-    let mut f = UkfLpc::new(scenario, params, real.bearings[0], &obs[0])?;
     let mut out = Vec::with_capacity(real.bearings.len());
     let m = f.cartesian_mean(&obs[0])?;
     out.push([m[0], m[1]]);

@@ -88,18 +88,16 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         seed,
         ..AblationConfig::at_scale(sc)
     };
-    let mut geo_cfg = GeometryConfig {
-        seed,
-        ..GeometryConfig::at_scale(sc)
-    };
+    let mut geo_cfg = GeometryConfig::at_scale(sc);
+    geo_cfg.base.seed = seed;
     if ctx.scale == Scale::Quick {
         // Seconds in the dev profile: a smoke test of the pipeline, not a result.
         rmse_cfg.realisations = 3;
         abl_cfg.realisations = 1;
         abl_cfg.lambda_steps = vec![10, 40];
         abl_cfg.grids = vec![[12, 6], [48, 24]];
-        geo_cfg.realisations = 1;
-        geo_cfg.filters.particles = 500;
+        geo_cfg.base.realisations = 1;
+        geo_cfg.base.filters.particles = 500;
         geo_cfg.sigmas_deg = vec![1.0];
     }
     let r = rmse(&rmse_cfg).map_err(homotopy)?;
@@ -499,7 +497,7 @@ fn geometry_table(geo: &GeometryResult, cfg: &GeometryConfig) -> Table {
              bearing noise σ; {} realisations per row (the same in every row), PF with \
              N = {}. The last column says whether OHF and AOHF both beat the UKF-LPC, as the \
              paper reports.",
-            cfg.realisations, cfg.filters.particles
+            cfg.base.realisations, cfg.base.filters.particles
         ),
         header: vec![
             "turn".into(),
