@@ -1,4 +1,5 @@
-//! Error metrics: RMSE as Karlsson et al. define it, REC curves, residual summaries.
+//! Error metrics: RMSE as Karlsson et al. define it, REC curves, residual summaries, and
+//! equal-width histograms of residuals or estimates.
 
 use crate::error::{CoreError, Result};
 use serde::{Deserialize, Serialize};
@@ -180,6 +181,59 @@ impl ResidualSummary {
     }
 }
 
+/// Counts in equal-width bins: `bins + 1` increasing edges and a count per bin.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Histogram {
+    /// `bins + 1` edges, from the smallest value to the largest.
+    pub edges: Vec<f64>,
+    /// Count per bin; the largest value falls in the last bin.
+    pub counts: Vec<usize>,
+}
+
+impl Histogram {
+    /// `bins` equal-width bins over `[min, max]` of `x`; a constant sample gets one unit of
+    /// width centred on its value, so that the edges still increase.
+    ///
+    /// # Errors
+    /// No values, a non-finite value (which would otherwise land silently in a bin), or
+    /// `bins = 0`.
+    pub fn new(x: &[f64], bins: usize) -> Result<Self> {
+        if x.is_empty() {
+            return Err(CoreError::Empty {
+                what: "histogram values",
+            });
+        }
+        if bins == 0 {
+            return Err(CoreError::InvalidParameter {
+                name: "bins",
+                value: 0.0,
+                reason: "a histogram needs at least one bin",
+            });
+        }
+        if let Some(index) = x.iter().position(|v| !v.is_finite()) {
+            return Err(CoreError::NonFiniteData {
+                what: "histogram values",
+                index,
+                value: x[index],
+            });
+        }
+        let lo = x.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let (lo, hi) = if hi > lo {
+            (lo, hi)
+        } else {
+            (lo - 0.5, lo + 0.5)
+        };
+        let w = (hi - lo) / bins as f64;
+        let edges = (0..=bins).map(|i| lo + w * i as f64).collect();
+        let mut counts = vec![0; bins];
+        for &v in x {
+            counts[(((v - lo) / w) as usize).min(bins - 1)] += 1;
+        }
+        Ok(Histogram { edges, counts })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -210,5 +264,23 @@ mod tests {
         assert_eq!(s.max_abs, 3.0);
         assert!((s.std - 7f64.sqrt()).abs() < 1e-15);
         assert!(ResidualSummary::new(&[]).is_err());
+    }
+
+    #[test]
+    fn histogram_counts_every_value_once_between_its_edges() {
+        let x = [0.0, 0.1, 0.5, 0.9, 1.0, 0.25];
+        let h = Histogram::new(&x, 4).unwrap();
+        assert_eq!(h.edges, vec![0.0, 0.25, 0.5, 0.75, 1.0]);
+        // [0, .25): 0, .1; [.25, .5): .25; [.5, .75): .5; [.75, 1]: .9, 1 (max in last bin).
+        assert_eq!(h.counts, vec![2, 1, 1, 2]);
+        let c = Histogram::new(&[3.0, 3.0], 2).unwrap();
+        assert_eq!(c.edges, vec![2.5, 3.0, 3.5]);
+        assert_eq!(c.counts, vec![0, 2]);
+        assert!(Histogram::new(&[], 3).is_err());
+        assert!(Histogram::new(&[1.0], 0).is_err());
+        assert!(matches!(
+            Histogram::new(&[1.0, f64::NAN], 3),
+            Err(CoreError::NonFiniteData { index: 1, .. })
+        ));
     }
 }

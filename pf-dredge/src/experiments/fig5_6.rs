@@ -5,7 +5,7 @@ use crate::error::Result;
 use crate::estimator::{EstimatorConfig, residuals_of, run_filter};
 use crate::simulator::{SimConfig, simulate};
 use pf_core::mc::stream_rng;
-use pf_core::metrics::ResidualSummary;
+use pf_core::metrics::{Histogram, ResidualSummary};
 use serde::{Deserialize, Serialize};
 
 /// Settings of Figs. 5–6.
@@ -41,37 +41,6 @@ impl Fig56Config {
             c.filter = c.filter.with_particles(300);
         }
         c
-    }
-}
-
-/// A histogram with equal-width bins.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Histogram {
-    /// `bins + 1` edges.
-    pub edges: Vec<f64>,
-    /// Count per bin.
-    pub counts: Vec<usize>,
-}
-
-impl Histogram {
-    /// Histogram of `x` over `[min, max]` with `bins` bins (at least 1).
-    pub fn new(x: &[f64], bins: usize) -> Self {
-        let bins = bins.max(1);
-        let lo = x.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let (lo, hi) = if lo.is_finite() && hi > lo {
-            (lo, hi)
-        } else {
-            (lo.min(0.0), lo.max(0.0) + 1.0)
-        };
-        let w = (hi - lo) / bins as f64;
-        let edges = (0..=bins).map(|i| lo + w * i as f64).collect();
-        let mut counts = vec![0; bins];
-        for &v in x {
-            let i = (((v - lo) / w) as usize).min(bins - 1);
-            counts[i] += 1;
-        }
-        Histogram { edges, counts }
     }
 }
 
@@ -182,8 +151,8 @@ pub fn fig5_6(cfg: &Fig56Config) -> Result<Fig56Result> {
                 nominal_range: 400.0,
             },
         )?,
-        q_o_hist: Histogram::new(&rq, cfg.bins),
-        rho_o_hist: Histogram::new(&rr, cfg.bins),
+        q_o_hist: Histogram::new(&rq, cfg.bins)?,
+        rho_o_hist: Histogram::new(&rr, cfg.bins)?,
         q_o_true: q_true,
         q_o_hat: q_hat,
         rho_o_true: r_true,

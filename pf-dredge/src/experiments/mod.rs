@@ -17,10 +17,12 @@ mod fig8;
 mod n_sweep;
 
 pub use cycle::{CycleConfig, cycle};
-pub use fig5_6::{Fig56Config, Fig56Result, Histogram, PaperResiduals, ResidualReport, fig5_6};
+pub use fig5_6::{Fig56Config, Fig56Result, PaperResiduals, ResidualReport, fig5_6};
 pub use fig7::{Fig7Config, Fig7Result, fig7};
 pub use fig8::{Band, Fig8Config, Fig8Result, fig8};
 pub use n_sweep::{NSweepConfig, NSweepResult, NSweepRow, n_sweep};
+/// Fig. 6's histograms are pf-core's (re-exported where they used to be defined).
+pub use pf_core::metrics::Histogram;
 
 use serde::{Deserialize, Serialize};
 
