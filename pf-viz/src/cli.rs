@@ -1,8 +1,9 @@
 //! The command line, as clap derive types. Parsing only: [`crate::run`] acts on it.
 
+use std::ffi::OsString;
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use serde::{Deserialize, Serialize};
 
 /// `pf-viz`: figures, tables and Rerun recordings for the pf papers.
@@ -12,6 +13,32 @@ pub struct Cli {
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
+}
+
+impl Cli {
+    /// The command tree, with negative numbers accepted as option values in every
+    /// subcommand: without this clap reads `--sigma-deg -1` as a flag `-1`, and the user
+    /// never sees the range check that explains what is wrong with the value.
+    pub fn command_tree() -> clap::Command {
+        fn allow(c: clap::Command) -> clap::Command {
+            c.allow_negative_numbers(true).mut_subcommands(allow)
+        }
+        allow(Cli::command())
+    }
+
+    /// Parse `args` (the first is the program name) against [`Cli::command_tree`].
+    ///
+    /// # Errors
+    /// clap's usage errors, and `--help` or `--version` (as clap reports them).
+    pub fn try_parse_args<I, T>(args: I) -> Result<Cli, clap::Error>
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<OsString> + Clone,
+    {
+        let mut tree = Self::command_tree();
+        let matches = tree.try_get_matches_from_mut(args)?;
+        Cli::from_arg_matches(&matches).map_err(|e| e.format(&mut tree))
+    }
 }
 
 /// The subcommands.
@@ -153,22 +180,30 @@ impl RrdOutput {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::CommandFactory;
 
     #[test]
     fn cli_is_well_formed() {
-        Cli::command().debug_assert();
+        Cli::command_tree().debug_assert();
+    }
+
+    /// A negative number reaches the value's own check (here u64 parsing), never clap's
+    /// "unexpected argument" for a flag of that name.
+    #[test]
+    fn negative_numbers_are_values() {
+        let e = Cli::try_parse_args(["pf-viz", "report", "--out", "x", "--seed", "-1"])
+            .unwrap_err();
+        assert_eq!(e.kind(), clap::error::ErrorKind::ValueValidation, "{e}");
     }
 
     #[test]
     fn report_defaults() {
-        let cli = Cli::try_parse_from(["pf-viz", "report", "--out", "x"]).unwrap();
+        let cli = Cli::try_parse_args(["pf-viz", "report", "--out", "x"]).unwrap();
         let Command::Report(a) = cli.command else {
             panic!("parsed as another subcommand")
         };
         assert_eq!(a.seed, 1);
         assert!(!a.no_rrd);
-        assert!(Cli::try_parse_from(["pf-viz", "report"]).is_err());
-        assert!(Cli::try_parse_from(["pf-viz", "report", "--out", "x", "--seed", "-3"]).is_err());
+        assert!(Cli::try_parse_args(["pf-viz", "report"]).is_err());
+        assert!(Cli::try_parse_args(["pf-viz", "report", "--out", "x", "--seed", "-3"]).is_err());
     }
 }
