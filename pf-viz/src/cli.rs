@@ -190,8 +190,8 @@ mod tests {
     /// "unexpected argument" for a flag of that name.
     #[test]
     fn negative_numbers_are_values() {
-        let e = Cli::try_parse_args(["pf-viz", "report", "--out", "x", "--seed", "-1"])
-            .unwrap_err();
+        let e =
+            Cli::try_parse_args(["pf-viz", "report", "--out", "x", "--seed", "-1"]).unwrap_err();
         assert_eq!(e.kind(), clap::error::ErrorKind::ValueValidation, "{e}");
     }
 
