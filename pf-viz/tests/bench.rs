@@ -1,20 +1,8 @@
 //! `pf-viz bench bootstrap` as other tools call it: its JSON contract and its errors.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn pf_viz(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pf-viz"))
-        .args(args)
-        .output()
-        .expect("pf-viz runs")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pf-viz-bench-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+use common::{Scratch, pf_viz, pf_viz_ok};
 
 #[test]
 fn bad_bench_arguments_exit_non_zero_with_nothing_on_stdout() {
@@ -32,9 +20,8 @@ fn bad_bench_arguments_exit_non_zero_with_nothing_on_stdout() {
 
 #[test]
 fn bench_bootstrap_keeps_its_json_contract() {
-    let dir = temp_dir("bench");
-    std::fs::create_dir_all(&dir).unwrap();
-    let data = dir.join("y.csv");
+    let dir = Scratch::new("bootstrap");
+    let data = dir.path("y.csv");
     let ys: Vec<String> = (0..51)
         .map(|k| format!("{}", (k as f64 * 0.1).sin()))
         .collect();
@@ -51,11 +38,11 @@ fn bench_bootstrap_keeps_its_json_contract() {
     )
     .unwrap();
     for threads in ["1", "2"] {
-        let o = pf_viz(&[
+        let o = pf_viz_ok(&[
             "bench",
             "bootstrap",
             "--data",
-            data.to_str().unwrap(),
+            &data,
             "--particles",
             "2000",
             "--threads",
@@ -64,7 +51,6 @@ fn bench_bootstrap_keeps_its_json_contract() {
             "3",
             "--json",
         ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         for key in [
             "particles",
@@ -86,7 +72,7 @@ fn bench_bootstrap_keeps_its_json_contract() {
             "bench",
             "bootstrap",
             "--data",
-            data.to_str().unwrap(),
+            &data,
             "--particles",
             "20000",
             "--threads",
@@ -100,23 +86,16 @@ fn bench_bootstrap_keeps_its_json_contract() {
     assert_eq!(ll("1").to_bits(), ll("2").to_bits());
     // A malformed data file names the line.
     std::fs::write(&data, "y\n1.0\noops\n").unwrap();
-    let o = pf_viz(&[
-        "bench",
-        "bootstrap",
-        "--data",
-        data.to_str().unwrap(),
-        "--json",
-    ]);
+    let o = pf_viz(&["bench", "bootstrap", "--data", &data, "--json"]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("line 3"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn bench_genealogy_prunes_dead_branches() {
     // Coalescence takes a few multiples of N steps here (weakly informative observations).
     let (n, steps) = (200usize, 2000usize);
-    let o = pf_viz(&[
+    let o = pf_viz_ok(&[
         "bench",
         "genealogy",
         "--particles",
@@ -125,7 +104,6 @@ fn bench_genealogy_prunes_dead_branches() {
         &steps.to_string(),
         "--json",
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let peak = v["peak_nodes"].as_u64().unwrap() as usize;
     let live = v["live_nodes"].as_u64().unwrap() as usize;

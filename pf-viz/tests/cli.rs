@@ -1,32 +1,11 @@
 //! End-to-end checks of the `pf-viz` binary.
 
+mod common;
+
 use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 
-const BIN: &str = env!("CARGO_BIN_EXE_pf-viz");
-
-/// A fresh scratch directory, removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(tag: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("pf-viz-cli-{tag}-{}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
-}
-
-fn pf_viz(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().expect("run pf-viz")
-}
+use common::{Scratch, one_line_error, pf_viz, pf_viz_ok};
 
 fn names(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = fs::read_dir(dir)
@@ -67,8 +46,8 @@ fn check_png(path: &Path) {
 #[test]
 fn report_writes_figures_recording_and_summary() {
     let s = Scratch::new("report");
-    let out = s.0.join("nested/out");
-    let o = pf_viz(&[
+    let out = s.dir().join("nested/out");
+    pf_viz_ok(&[
         "report",
         "--out",
         out.to_str().unwrap(),
@@ -79,11 +58,6 @@ fn report_writes_figures_recording_and_summary() {
         "--scale",
         "quick",
     ]);
-    assert!(
-        o.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
 
     let mut expected = vec![
         "REPORT.md",
@@ -136,9 +110,9 @@ fn report_writes_figures_recording_and_summary() {
 #[test]
 fn same_seed_same_numbers_whatever_the_jobs() {
     let s = Scratch::new("determinism");
-    let (a, b) = (s.0.join("a"), s.0.join("b"));
+    let (a, b) = (s.dir().join("a"), s.dir().join("b"));
     for (d, jobs) in [(&a, "1"), (&b, "2")] {
-        let o = pf_viz(&[
+        pf_viz_ok(&[
             "report",
             "--out",
             d.to_str().unwrap(),
@@ -148,11 +122,6 @@ fn same_seed_same_numbers_whatever_the_jobs() {
             "--jobs",
             jobs,
         ]);
-        assert!(
-            o.status.success(),
-            "stderr: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
     }
     // Everything but the parts the summary itself declares timing-dependent is identical.
     let load = |d: &Path| -> serde_json::Value {
@@ -193,16 +162,15 @@ fn same_seed_same_numbers_whatever_the_jobs() {
 #[test]
 fn unwritable_out_fails_with_one_line_and_leaves_nothing() {
     let s = Scratch::new("unwritable");
-    let file = s.0.join("plain-file");
+    let file = s.dir().join("plain-file");
     fs::write(&file, b"not a directory").unwrap();
     let out = file.join("out");
     let o = pf_viz(&["report", "--out", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
-    let stderr = String::from_utf8(o.stderr).unwrap();
-    assert_eq!(stderr.lines().count(), 1, "one line: {stderr:?}");
+    // The one line names the path.
+    let stderr = one_line_error(&o, "unwritable --out", &["plain-file"]);
     assert!(stderr.starts_with("error: "), "{stderr:?}");
-    assert!(stderr.contains("plain-file"), "names the path: {stderr:?}");
-    assert_eq!(names(&s.0), vec!["plain-file"], "nothing created");
+    assert_eq!(names(s.dir()), vec!["plain-file"], "nothing created");
     assert_eq!(fs::read(&file).unwrap(), b"not a directory");
 }
 
@@ -216,8 +184,7 @@ fn bad_arguments_are_rejected() {
     ] {
         let o = pf_viz(args);
         assert_eq!(o.status.code(), Some(2), "{args:?} should fail");
-        let stderr = String::from_utf8(o.stderr).unwrap();
-        assert_eq!(stderr.lines().count(), 1, "{args:?}: one line: {stderr:?}");
+        let stderr = one_line_error(&o, &format!("{args:?}"), &[]);
         assert!(stderr.starts_with("error: "), "{args:?}: {stderr:?}");
     }
     // A missing required argument is named on that one line.
@@ -232,11 +199,7 @@ fn bad_arguments_are_rejected() {
         (&["report", "--out", "x", "--jobs", "0"][..], "--jobs"),
         (&["report", "--out", "x", "--scale", "huge"][..], "huge"),
     ] {
-        let o = pf_viz(args);
-        assert!(!o.status.success(), "{args:?} should fail");
-        let stderr = String::from_utf8(o.stderr).unwrap();
-        assert_eq!(stderr.lines().count(), 1, "{args:?}: one line: {stderr:?}");
-        assert!(stderr.contains(needle), "{args:?}: {stderr:?}");
+        one_line_error(&pf_viz(args), &format!("{args:?}"), &[needle]);
     }
     assert!(!Path::new("x").exists(), "no output for rejected arguments");
 }

@@ -1,42 +1,17 @@
 //! End-to-end checks of `pf-viz dredge simulate|estimate`: the JSON contract, the on-line
 //! mode against the file mode, and one error per bad input of the issue.
 
+mod common;
+
 use std::fs;
 use std::io::{BufRead, BufReader, Write};
-use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_pf-viz");
+use common::{BIN, Scratch, one_line_error, pf_viz, pf_viz_json, pf_viz_ok};
 
-/// A fresh scratch directory, removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(tag: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("pf-viz-dredge-{tag}-{}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn file(&self, name: &str, text: &str) -> PathBuf {
-        let p = self.0.join(name);
-        fs::write(&p, text).unwrap();
-        p
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
-}
-
-fn pf_viz(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().expect("run pf-viz")
-}
-
+/// Runs `pf-viz` with `args`, feeding it `stdin` (the on-line mode reads from a pipe).
 fn pf_viz_stdin(args: &[&str], stdin: &[u8]) -> Output {
     let mut child = Command::new(BIN)
         .args(args)
@@ -49,33 +24,10 @@ fn pf_viz_stdin(args: &[&str], stdin: &[u8]) -> Output {
     child.wait_with_output().unwrap()
 }
 
-fn simulated(dir: &Scratch) -> PathBuf {
-    let csv = dir.0.join("cycle.csv");
-    let out = pf_viz(&[
-        "dredge",
-        "simulate",
-        "--out",
-        csv.to_str().unwrap(),
-        "--seed",
-        "3",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+fn simulated(dir: &Scratch) -> String {
+    let csv = dir.path("cycle.csv");
+    pf_viz_ok(&["dredge", "simulate", "--out", &csv, "--seed", "3"]);
     csv
-}
-
-fn json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8(out.stdout.clone()).unwrap();
-    assert_eq!(text.lines().count(), 1, "--json prints exactly one line");
-    serde_json::from_str(&text).unwrap()
 }
 
 fn floats(v: &Value) -> Vec<f64> {
@@ -93,17 +45,17 @@ fn simulate_then_estimate_keeps_the_json_contract() {
     let text = fs::read_to_string(&csv).unwrap();
     assert!(text.starts_with("t,V_t,m_t,Q_i,rho_i,Q_o,rho_o\n"));
     let n = text.lines().count() - 1;
-    let v = json(&pf_viz(&[
+    let v = pf_viz_json(&[
         "dredge",
         "estimate",
         "--data",
-        csv.to_str().unwrap(),
+        &csv,
         "--particles",
         "300",
         "--seed",
         "4",
         "--json",
-    ]));
+    ]);
     for key in ["t", "Q_o", "rho_o"] {
         assert_eq!(v[key].as_array().unwrap().len(), n, "{key}");
     }
@@ -130,17 +82,17 @@ fn simulate_then_estimate_keeps_the_json_contract() {
         .map(|l| l.split(',').take(5).collect::<Vec<_>>().join(",") + "\n")
         .collect();
     let p = dir.file("no_truth.csv", &no_truth);
-    let v2 = json(&pf_viz(&[
+    let v2 = pf_viz_json(&[
         "dredge",
         "estimate",
         "--data",
-        p.to_str().unwrap(),
+        &p,
         "--particles",
         "300",
         "--seed",
         "4",
         "--json",
-    ]));
+    ]);
     assert!(v2.get("residuals").is_none());
     assert_eq!(
         v2["Q_o"], v["Q_o"],
@@ -150,7 +102,7 @@ fn simulate_then_estimate_keeps_the_json_contract() {
 
 /// The first `rows` data rows of the simulated cycle, with some cells emptied (missing
 /// observations) to exercise that path in both modes.
-fn with_gaps(csv: &Path, rows: usize) -> String {
+fn with_gaps(csv: &str, rows: usize) -> String {
     let text = fs::read_to_string(csv).unwrap();
     let mut out = String::new();
     for (i, line) in text.lines().take(rows + 1).enumerate() {
@@ -175,15 +127,9 @@ fn online_gives_the_file_mode_estimates_for_the_same_seed() {
     let text = with_gaps(&csv, 500);
     let p = dir.file("gaps.csv", &text);
     let args = ["--particles", "200", "--seed", "9", "--runs", "2"];
-    let mut file_args = vec![
-        "dredge",
-        "estimate",
-        "--data",
-        p.to_str().unwrap(),
-        "--json",
-    ];
+    let mut file_args = vec!["dredge", "estimate", "--data", &p, "--json"];
     file_args.extend(args);
-    let file = json(&pf_viz(&file_args));
+    let file = pf_viz_json(&file_args);
     let mut online_args = vec!["dredge", "estimate", "--data", "-", "--online"];
     online_args.extend(args);
     let out = pf_viz_stdin(&online_args, text.as_bytes());
@@ -266,22 +212,15 @@ fn rejects(dir: &Scratch, name: &str, text: &str, needles: &[&str]) {
                 "dredge",
                 "estimate",
                 "--data",
-                p.to_str().unwrap(),
+                &p,
                 "--particles",
                 "50",
                 "--json",
             ])
         };
         assert_eq!(out.status.code(), Some(1), "{name} (online {online})");
-        let err = String::from_utf8(out.stderr).unwrap();
-        assert_eq!(err.lines().count(), 1, "{name}: one line, got {err}");
+        let err = one_line_error(&out, &format!("{name} (online {online})"), needles);
         assert!(err.starts_with("error: "), "{err}");
-        for n in needles {
-            assert!(
-                err.contains(n),
-                "{name} (online {online}): `{n}` not in {err}"
-            );
-        }
         if !online {
             assert!(out.stdout.is_empty(), "{name}: nothing on stdout");
         }

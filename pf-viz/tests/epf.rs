@@ -1,66 +1,19 @@
 //! End-to-end checks of `pf-viz epf simulate|track|energies`: the CSV and JSON contracts and
 //! the one-line errors for bad input.
 
+mod common;
+
 use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 
-use serde_json::Value;
-
-const BIN: &str = env!("CARGO_BIN_EXE_pf-viz");
-
-/// A fresh scratch directory, removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(tag: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("pf-viz-epf-{tag}-{}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-
-    fn file(&self, name: &str, text: &str) -> String {
-        let p = self.0.join(name);
-        fs::write(&p, text).unwrap();
-        p.display().to_string()
-    }
-
-    fn path(&self, name: &str) -> String {
-        self.0.join(name).display().to_string()
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
-}
-
-fn pf_viz(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().expect("run pf-viz")
-}
-
-fn json(out: &Output) -> Value {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8(out.stdout.clone()).unwrap();
-    assert_eq!(text.lines().count(), 1, "--json prints exactly one line");
-    serde_json::from_str(&text).unwrap()
-}
+use common::{Scratch, one_line_error, pf_viz, pf_viz_json, pf_viz_ok};
 
 /// The command fails with exit code 1 and one `error: …` line that contains every `needle`.
 fn fails_with(out: &Output, needles: &[&str]) {
     assert_eq!(out.status.code(), Some(1), "exit code");
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    let err = one_line_error(out, "epf", needles);
     assert!(err.starts_with("error: "), "{err}");
-    for n in needles {
-        assert!(err.contains(n), "{err:?} should contain {n:?}");
-    }
     assert!(out.stdout.is_empty(), "nothing on stdout");
 }
 
@@ -77,19 +30,14 @@ fn simulate(dir: &Path, scenario: &str, extra: &[&str]) {
         &out_dir,
     ];
     args.extend_from_slice(extra);
-    let out = pf_viz(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    pf_viz_ok(&args);
 }
 
 #[test]
 fn simulate_then_track_follows_the_contract() {
     let s = Scratch::new("track");
-    simulate(&s.0, "walking-men", &["--clutter", "1", "--miss", "0.1"]);
-    let det = fs::read_to_string(s.0.join("detections.csv")).unwrap();
+    simulate(s.dir(), "walking-men", &["--clutter", "1", "--miss", "0.1"]);
+    let det = fs::read_to_string(s.path("detections.csv")).unwrap();
     let header: Vec<&str> = det.lines().next().unwrap().split(',').collect();
     assert_eq!(header, ["frame", "x", "y", "target"]);
     let rows: Vec<Vec<&str>> = det
@@ -98,7 +46,7 @@ fn simulate_then_track_follows_the_contract() {
         .map(|l| l.split(',').collect())
         .collect();
     assert!(rows.iter().any(|r| r[3] == "-1"), "clutter is labelled −1");
-    let init = fs::read_to_string(s.0.join("init.csv")).unwrap();
+    let init = fs::read_to_string(s.path("init.csv")).unwrap();
     assert_eq!(init.lines().next().unwrap(), "target,frame,x,y");
     assert_eq!(
         init.lines().count(),
@@ -107,7 +55,7 @@ fn simulate_then_track_follows_the_contract() {
     );
 
     for method in ["energy", "nn"] {
-        let v = json(&pf_viz(&[
+        let v = pf_viz_json(&[
             "epf",
             "track",
             "--data",
@@ -121,7 +69,7 @@ fn simulate_then_track_follows_the_contract() {
             "--seed",
             "1",
             "--json",
-        ]));
+        ]);
         let frames = v["frames"].as_array().unwrap();
         // Frames 0 and 1 are the init; 2..=12 are tracked (the miss rate may drop none
         // entirely, since clutter and the other targets keep frames present, but at most
@@ -153,8 +101,8 @@ fn simulate_then_track_follows_the_contract() {
 #[test]
 fn energies_follow_the_contract() {
     let s = Scratch::new("energies");
-    simulate(&s.0, "van-plane", &[]);
-    let v = json(&pf_viz(&[
+    simulate(s.dir(), "van-plane", &[]);
+    let v = pf_viz_json(&[
         "epf",
         "energies",
         "--data",
@@ -166,7 +114,7 @@ fn energies_follow_the_contract() {
         "--particles",
         "100",
         "--json",
-    ]));
+    ]);
     assert_eq!(v["targets"].as_array().unwrap().len(), 2);
     let m = v["detections"].as_array().unwrap().len();
     assert_eq!(m, 2, "no clutter, no misses: two detections at frame 6");

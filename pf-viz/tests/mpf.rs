@@ -1,28 +1,12 @@
 //! `pf-viz mpf …` end to end: the JSON contracts and the one-line errors.
 
-use std::process::{Command, Output};
+mod common;
 
-const BIN: &str = env!("CARGO_BIN_EXE_pf-viz");
-
-fn pf_viz(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().expect("run pf-viz")
-}
-
-fn json(args: &[&str]) -> serde_json::Value {
-    let o = pf_viz(args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let stdout = String::from_utf8(o.stdout).unwrap();
-    assert_eq!(stdout.lines().count(), 1, "one JSON line on stdout");
-    serde_json::from_str(&stdout).unwrap()
-}
+use common::{one_line_error, pf_viz, pf_viz_json};
 
 #[test]
 fn calibrate_gives_positive_finite_coefficients() {
-    let v = json(&["mpf", "calibrate", "--quick", "--json"]);
+    let v = pf_viz_json(&["mpf", "calibrate", "--quick", "--json"]);
     for key in ["flop_ns", "c1", "c2", "c3"] {
         let x = v[key].as_f64().unwrap_or_else(|| panic!("{key} missing"));
         assert!(x.is_finite() && x > 0.0, "{key} = {x}");
@@ -31,7 +15,7 @@ fn calibrate_gives_positive_finite_coefficients() {
 
 #[test]
 fn ratio_reproduces_the_papers_worked_number() {
-    let v = json(&["mpf", "ratio", "--json"]);
+    let v = pf_viz_json(&["mpf", "ratio", "--json"]);
     let m: Vec<u64> = v["m"]
         .as_array()
         .unwrap()
@@ -60,7 +44,7 @@ fn ratio_reproduces_the_papers_worked_number() {
 #[test]
 fn tables_keep_the_contract() {
     for cmd in ["table2", "table3"] {
-        let v = json(&[
+        let v = pf_viz_json(&[
             "mpf", cmd, "--scale", "quick", "--mc", "2", "--seed", "3", "--json",
         ]);
         let rows = v["partitions"].as_array().unwrap();
@@ -79,7 +63,7 @@ fn tables_keep_the_contract() {
 
 #[test]
 fn advise_ranks_partitions() {
-    let v = json(&[
+    let v = pf_viz_json(&[
         "mpf",
         "advise",
         "--p",
@@ -97,7 +81,7 @@ fn advise_ranks_partitions() {
         times.windows(2).all(|w| w[0] <= w[1]),
         "fastest first: {times:?}"
     );
-    let v = json(&[
+    let v = pf_viz_json(&[
         "mpf",
         "advise",
         "--p",
@@ -155,10 +139,7 @@ fn bad_input_gets_one_line_and_a_failure() {
         (&["mpf", "table3", "--mc", "many"][..], "many"),
     ] {
         let o = pf_viz(args);
-        assert!(!o.status.success(), "{args:?} should fail");
         assert!(o.stdout.is_empty(), "{args:?}: nothing on stdout");
-        let stderr = String::from_utf8(o.stderr).unwrap();
-        assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr:?}");
-        assert!(stderr.contains(needle), "{args:?}: {stderr:?}");
+        one_line_error(&o, &format!("{args:?}"), &[needle]);
     }
 }

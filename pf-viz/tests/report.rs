@@ -3,13 +3,15 @@
 //! tools (when `PF_RERUN` names them, as `scripts/test.sh` arranges), and the pages carry
 //! every figure and table without reaching for the network.
 
+mod common;
+
 use std::collections::BTreeSet;
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
-const BIN: &str = env!("CARGO_BIN_EXE_pf-viz");
+use common::BIN;
 
 /// The paper sections `--only` accepts, as the issue names them.
 const PAPERS: [&str; 5] = ["smooth", "mpf", "homotopy", "dredge", "epf"];
