@@ -158,6 +158,14 @@ fn draw_panel(
         .axis_desc_style(style::text(style::LABEL_PX))
         .label_style(style::text(style::TICK_PX))
         .x_labels(6)
+        // Counts: whole numbers without a trailing ".0" (plotters' default for f64 axes).
+        .y_label_formatter(&|v| {
+            if v.fract() == 0.0 {
+                format!("{v:.0}")
+            } else {
+                format!("{v:.1}")
+            }
+        })
         .bold_line_style(style::GRID.stroke_width(1))
         .light_line_style(WHITE.stroke_width(0))
         .axis_style(style::INK.stroke_width(1))
@@ -194,6 +202,12 @@ fn draw_panel(
         ];
         let (w, _) = area.dim_in_pixel();
         let x = (w as i32 - 285).max(style::Y_LABEL_AREA_PX as i32 + 10);
+        // A backing box, so that the mean's dashed line never runs through the text.
+        area.draw(&Rectangle::new(
+            [(x - 6, 64), (x + 278, 70 + 26 * lines.len() as i32)],
+            WHITE.mix(0.9).filled(),
+        ))
+        .map_err(&err)?;
         for (i, l) in lines.iter().enumerate() {
             area.draw(&Text::new(
                 l.clone(),
