@@ -1,4 +1,6 @@
-//! Each resampling scheme at N = 10⁶, on skewed weights. Throughput in particles.
+//! Each resampling scheme on skewed weights, at N = 10⁴ … 10⁷: the target is at
+//! N = 10⁶, and a flat cost per particle across N shows the schemes are O(N). Throughput in
+//! particles.
 #![allow(missing_docs)] // criterion's macros generate undocumented items
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -8,25 +10,27 @@ use rand::RngExt;
 use std::hint::black_box;
 
 fn resample(c: &mut Criterion) {
-    let n = 1_000_000;
     let mut rng = stream_rng(3, 0);
-    let raw: Vec<f64> = (0..n).map(|_| rng.random::<f64>().powi(4)).collect();
-    let total: f64 = raw.iter().sum();
-    let w: Vec<f64> = raw.iter().map(|x| x / total).collect();
-    let mut ancestors = vec![0usize; n];
     let mut group = c.benchmark_group("resample");
-    group.throughput(Throughput::Elements(n as u64));
-    for scheme in Resampler::ALL {
-        group.bench_with_input(
-            BenchmarkId::new(scheme.name(), format!("N={n}")),
-            &scheme,
-            |b, s| {
-                b.iter(|| {
-                    s.resample(&w, &mut rng, &mut ancestors);
-                    black_box(ancestors[n / 2])
-                })
-            },
-        );
+    group.sample_size(10);
+    for n in [10_000usize, 100_000, 1_000_000, 10_000_000] {
+        let raw: Vec<f64> = (0..n).map(|_| rng.random::<f64>().powi(4)).collect();
+        let total: f64 = raw.iter().sum();
+        let w: Vec<f64> = raw.iter().map(|x| x / total).collect();
+        let mut ancestors = vec![0usize; n];
+        group.throughput(Throughput::Elements(n as u64));
+        for scheme in Resampler::ALL {
+            group.bench_with_input(
+                BenchmarkId::new(scheme.name(), format!("N={n}")),
+                &scheme,
+                |b, s| {
+                    b.iter(|| {
+                        s.resample(&w, &mut rng, &mut ancestors);
+                        black_box(ancestors[n / 2])
+                    })
+                },
+            );
+        }
     }
     group.finish();
 }
