@@ -20,7 +20,9 @@ const PAPERS: [&str; 5] = ["smooth", "mpf", "homotopy", "dredge", "epf"];
 fn report() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("pf-viz-report-{}", std::process::id()));
+        // Cargo's scratch directory for integration tests: a static is never dropped, so
+        // the report stays after the run, under the target directory rather than in /tmp.
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pf-viz-report");
         let _ = fs::remove_dir_all(&dir);
         let o = Command::new(BIN)
             .args(["report", "--scale", "quick", "--seed", "3", "--out"])
