@@ -30,7 +30,7 @@ pub use residual::Residual;
 pub use stratified::Stratified;
 pub use systematic::Systematic;
 
-pub(crate) use offspring::prefix4;
+pub(crate) use offspring::{SCAN, prefix4};
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};

@@ -13,6 +13,8 @@
 //! therefore differ from a left-to-right sum by rounding (a few ulp), which moves an
 //! ancestor only when a point falls within those few ulp of a cumulative weight.
 
+use crate::simd::{Simd, dispatch};
+
 /// Particles per block of boundaries.
 pub(crate) const SCAN: usize = 64;
 
@@ -111,6 +113,20 @@ where
 }
 
 /// The cumulative weights [`walk`] uses, for tests and reference merges.
+/// [`walk`] over the weights `w` on the chosen kernels, for the schemes whose boundaries
+/// need nothing but the cumulative weights (systematic and stratified).
+#[inline(always)]
+pub(crate) fn walk_weights<B>(simd: Simd, w: &[f64], boundaries: B, out: &mut [usize])
+where
+    B: FnMut(usize, &[f64], &mut [usize]),
+{
+    dispatch(
+        simd,
+        #[inline(always)]
+        || walk(w.len(), |j| w[j], boundaries, out),
+    );
+}
+
 #[cfg(test)]
 pub(crate) fn cumulative(w: &[f64]) -> Vec<f64> {
     let mut out = vec![0.0; w.len()];

@@ -12,9 +12,9 @@
 //! (see [`offspring`](super::offspring)).
 
 use super::Resample;
-use super::offspring::walk;
+use super::offspring::walk_weights;
+use crate::simd::Simd;
 use crate::simd::math::floor_index;
-use crate::simd::{Simd, dispatch};
 use rand::Rng;
 
 /// Stratified resampling (Kitagawa 1996).
@@ -52,24 +52,18 @@ impl Resample for Stratified {
 fn stratified_from_key(simd: Simd, w: &[f64], key: u64, ancestors: &mut [usize]) {
     let m = ancestors.len();
     let mf = m as f64;
-    dispatch(
+    walk_weights(
         simd,
-        #[inline(always)]
-        || {
-            walk(
-                w.len(),
-                |j| w[j],
-                |_, c, k| {
-                    for (k, &c) in k.iter_mut().zip(c) {
-                        let x = mf * c;
-                        let (f, ff) = floor_index(x);
-                        let below = stratum_uniform(key, f) < x - ff;
-                        *k = if f >= m { m } else { f + usize::from(below) };
-                    }
-                },
-                ancestors,
-            )
+        w,
+        |_, c, k| {
+            for (k, &c) in k.iter_mut().zip(c) {
+                let x = mf * c;
+                let (f, ff) = floor_index(x);
+                let below = stratum_uniform(key, f) < x - ff;
+                *k = if f >= m { m } else { f + usize::from(below) };
+            }
         },
+        ancestors,
     );
 }
 

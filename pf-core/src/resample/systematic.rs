@@ -1,9 +1,9 @@
 //! Systematic resampling: `u_i = (i + U)/M` with a single `U ~ U[0, 1)`.
 
 use super::Resample;
-use super::offspring::walk;
+use super::offspring::walk_weights;
+use crate::simd::Simd;
 use crate::simd::math::ceil_index;
-use crate::simd::{Simd, dispatch};
 use rand::{Rng, RngExt};
 
 /// Systematic resampling (Kitagawa 1996; Carpenter, Clifford & Fearnhead 1999).
@@ -27,21 +27,15 @@ impl Resample for Systematic {
 /// Systematic resampling with a given `U ∈ [0, 1)`.
 pub(crate) fn systematic_from_uniform(simd: Simd, w: &[f64], u: f64, ancestors: &mut [usize]) {
     let mf = ancestors.len() as f64;
-    dispatch(
+    walk_weights(
         simd,
-        #[inline(always)]
-        || {
-            walk(
-                w.len(),
-                |j| w[j],
-                |_, c, k| {
-                    for (k, &c) in k.iter_mut().zip(c) {
-                        *k = ceil_index(mf * c - u);
-                    }
-                },
-                ancestors,
-            )
+        w,
+        |_, c, k| {
+            for (k, &c) in k.iter_mut().zip(c) {
+                *k = ceil_index(mf * c - u);
+            }
         },
+        ancestors,
     );
 }
 
