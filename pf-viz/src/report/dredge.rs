@@ -253,10 +253,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     );
 
     // Fig. 6: residual histograms.
-    let panel = |name: &str,
-                 unit: &str,
-                 h: &pf_core::metrics::Histogram,
-                 r: &ex::ResidualReport| HistPanel {
+    let panel = |name: &str, unit: &str, h: &ex::Histogram, r: &ex::ResidualReport| HistPanel {
         title: format!("{name} residual (simulated − estimated)"),
         x_label: format!("{name} residual ({unit})"),
         y_label: "samples".into(),
