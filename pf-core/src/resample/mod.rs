@@ -46,7 +46,7 @@ pub trait Resample: Sync {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Resampler {
-    /// Independent draws (sorted uniforms, O(N)).
+    /// Independent draws (a conditioned Poisson process of points, O(N)).
     Multinomial,
     /// One uniform shared by all strata.
     #[default]

@@ -1,56 +1,224 @@
-//! Multinomial resampling in O(N) through sorted uniforms generated in order.
+//! Multinomial resampling in O(N): a Poisson process of points, conditioned on its size.
 
 use super::Resample;
-use super::offspring::{SCAN, prefix4, walk};
+use super::offspring::walk;
+use crate::simd::LANES;
 use crate::simd::math::floor_index;
 use crate::simd::{LaneRng, Simd, dispatch};
-use rand::Rng;
+use rand::{Rng, RngExt};
 use std::cell::RefCell;
 
 /// Multinomial resampling: `M` independent draws from the weights.
 ///
-/// The draws are produced already sorted, so matching them to particles is linear, not
-/// O(N log N): the `M` sorted uniforms are `U_(i) = S_i / S_M` with `S_i = E_0 + … + E_i`
-/// and `E_0, …, E_M` independent unit exponentials (the spacings of uniform order statistics
-/// are exchangeable exponentials over their sum; Devroye 1986, §V.2). The exponentials come
-/// from a [`LaneRng`] seeded from the caller's generator (vectorised ziggurat).
+/// Drawing `M` independent uniforms and matching each with the cumulative weights needs
+/// the uniforms in order; sorting them costs O(M log M). Instead the points come already
+/// grouped in `M` equal cells of [0, 1):
 ///
-/// Each particle's offspring count is then found without a branchy merge, through a grid of
-/// `M` buckets: a table gives, for each bucket, how many points lie below it, and a
-/// particle only compares its cumulative weight with the points of its own bucket (one on
-/// average; four at a time). The ancestors are exactly those of the textbook merge of the
-/// same sorted points with the same cumulative weights (tested).
+/// 1. **Poissonisation.** Each cell gets an independent Poisson(1) number of points; the
+///    total `T` is then Poisson(M) and, given `T`, the points of a Poisson process are
+///    `T` independent uniforms.
+/// 2. **Conditioning on `M`.** If `T > M`, a uniformly chosen subset of `T − M` points is
+///    removed; if `T < M`, `M − T` cells drawn uniformly each get one more point. Removing a
+///    random subset of independent uniforms, or adding independent uniforms, leaves
+///    independent uniforms, so exactly `M` independent uniforms remain. (Points within a
+///    cell are exchangeable, so removing one of a cell's points is removing its last.)
+///    `|T − M|` is of order `√M`, drawn from the caller's generator.
+/// 3. **Offsets.** Point `g` of cell `f` sits at `(f + u_g)/M` with `u_g` uniform on
+///    [0, 1), drawn after the counts are final; a cell's points are not sorted, only
+///    counted.
+///
+/// Particle `j`'s boundary, the number of points below its cumulative weight `C_j`, is
+/// with `x = M·C_j` and `f = ⌊x⌋`: every point of the cells before `f`, plus the points of
+/// cell `f` with `u_g < x − f` (one comparison on average; four without a loop). The
+/// counts and offsets come from a [`LaneRng`] seeded from the caller's generator. The
+/// ancestors are exactly those of the textbook merge of the same points with the same
+/// cumulative weights (tested), and the joint law of the offspring counts is multinomial
+/// (tested by a chi-square over every outcome of a small case).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Multinomial;
 
 impl Resample for Multinomial {
     fn resample<R: Rng + ?Sized>(&self, w: &[f64], rng: &mut R, ancestors: &mut [usize]) {
-        sorted_draws(Simd::Auto, w.len(), |j| w[j], rng, ancestors);
+        multinomial_draws(Simd::Auto, w.len(), |j| w[j], rng, ancestors);
     }
 }
 
-/// Points below which the bucket search stops comparing: `+∞` past the last point.
+/// Offsets read past a cell's start without checking its count.
 const PAD: usize = 4;
 
+/// Poisson(1) thresholds: with `v` a uniform 53-bit integer, `#{k : v ≥ T_k}` is a
+/// Poisson(1) count (`T_k = 2⁵³·P(N ≤ k)`, exact to 2⁻⁵³ per outcome; from `k = 18` on
+/// `P(N ≤ k)` rounds to 1 and the count stops).
+const POISSON1: [u64; 20] = poisson1_thresholds();
+
+/// Thresholds compared in the vectorised pass; counts of `QUICK` or more (probability
+/// 6·10⁻⁴) are finished against the rest of [`POISSON1`].
+const QUICK: usize = 6;
+
+const fn poisson1_thresholds() -> [u64; 20] {
+    const INV_E: f64 = 0.367_879_441_171_442_33;
+    const TWO53: f64 = 9_007_199_254_740_992.0;
+    let mut t = [0u64; 20];
+    let (mut term, mut sum) = (1.0f64, 0.0f64);
+    let mut k = 0;
+    while k < t.len() {
+        sum += term;
+        let cdf = sum * INV_E;
+        // Rounding may take the sum a hair past 1; 2⁵³ is above every 53-bit draw.
+        t[k] = if cdf < 1.0 {
+            (cdf * TWO53) as u64
+        } else {
+            1 << 53
+        };
+        k += 1;
+        term /= k as f64;
+    }
+    t
+}
+
 thread_local! {
-    /// Scratch of [`sorted_draws`]: the partial sums `S_i` and the bucket table, reused
-    /// from call to call on each thread (no allocation once grown; contents never carry
-    /// over: every call overwrites what it reads).
-    static SCRATCH: RefCell<(Vec<f64>, Vec<usize>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+    /// Scratch of [`multinomial_draws`], reused from call to call on each thread (no
+    /// allocation once grown; every call overwrites what it reads).
+    static SCRATCH: RefCell<Points> = const { RefCell::new(Points::new()) };
+}
+
+/// `M` uniform points grouped in `M` cells.
+#[derive(Debug)]
+pub(crate) struct Points {
+    /// `first[f]`: index of cell `f`'s first point (`first[M] = first[M + 1] = M`).
+    first: Vec<usize>,
+    /// Positions `f + u_g` in cell order (sorted from cell to cell, not within a cell),
+    /// then `PAD` times +∞.
+    pos: Vec<f64>,
+    /// The conditioning step's sorted removals (point indices) or additions (cells).
+    fix: Vec<usize>,
+}
+
+impl Points {
+    const fn new() -> Self {
+        Points {
+            first: Vec::new(),
+            pos: Vec::new(),
+            fix: Vec::new(),
+        }
+    }
+
+    /// Draw `m ≥ 1` points: counts and offsets from `lanes`, the conditioning from `rng`.
+    #[inline(always)]
+    fn draw<R: Rng + ?Sized>(&mut self, m: usize, lanes: &mut LaneRng, rng: &mut R) {
+        let Points { first, pos, fix } = self;
+        first.resize(m + 2, 0);
+        pos.resize(m + PAD, 0.0);
+        // Poisson(1) counts, 64 cells per lane step, into first[..m].
+        let mut t = 0usize;
+        for cells in first[..m].chunks_mut(LANES) {
+            let bits = lanes.step();
+            let mut tail = false;
+            for (c, &b) in cells.iter_mut().zip(bits.iter()) {
+                let v = b >> 11;
+                let mut k = 0;
+                for &th in &POISSON1[..QUICK] {
+                    k += usize::from(v >= th);
+                }
+                tail |= k == QUICK;
+                *c = k;
+            }
+            if tail {
+                for (c, &b) in cells.iter_mut().zip(bits.iter()) {
+                    if *c == QUICK {
+                        let v = b >> 11;
+                        *c += POISSON1[QUICK..].iter().filter(|&&th| v >= th).count();
+                    }
+                }
+            }
+            t += cells.iter().sum::<usize>();
+        }
+        // Conditioning on M points: a uniform subset of T − M points to remove (distinct
+        // draws; the procedure is invariant under relabelling, so every subset is equally
+        // likely), or M − T cells, with replacement, to add to.
+        fix.clear();
+        if t > m {
+            let d = t - m;
+            while fix.len() < d {
+                for _ in fix.len()..d {
+                    fix.push(rng.random_range(0..t));
+                }
+                fix.sort_unstable();
+                fix.dedup();
+            }
+        } else {
+            fix.extend((t..m).map(|_| rng.random_range(0..m)));
+            fix.sort_unstable();
+        }
+        fix.push(usize::MAX);
+        // Counts into starts, removals and additions applied on the way.
+        let (mut start, mut orig, mut p) = (0usize, 0usize, 0usize);
+        for (f, c) in first[..m].iter_mut().enumerate() {
+            let mut nf = *c;
+            orig += *c;
+            if t > m {
+                while fix[p] < orig {
+                    nf -= 1;
+                    p += 1;
+                }
+            } else {
+                while fix[p] == f {
+                    nf += 1;
+                    p += 1;
+                }
+            }
+            *c = start;
+            start += nf;
+        }
+        first[m] = start;
+        first[m + 1] = start;
+        debug_assert_eq!(start, m);
+        // Positions f + u_g: each cell's index written over its points as a run (four
+        // at once, the next run overwriting the surplus), then uniform offsets added.
+        for f in 0..m {
+            let (a, b) = (first[f], first[f + 1]);
+            pos[a..a + PAD].copy_from_slice(&[f as f64; PAD]);
+            if b > a + PAD {
+                pos[a + PAD..b].fill(f as f64);
+            }
+        }
+        for u in pos[..m].chunks_mut(LANES) {
+            let bits = lanes.step();
+            for (u, &b) in u.iter_mut().zip(bits.iter()) {
+                *u += f64::from_bits((b >> 12) | 0x3ff0_0000_0000_0000) - 1.0;
+            }
+        }
+        pos[m..].fill(f64::INFINITY);
+    }
+
+    /// Boundary of the cumulative weight `c`: with `x = M·c`, every point of the cells
+    /// before `⌊x⌋`, plus the points of cell `⌊x⌋` below `x`, four compared at a time (a
+    /// cell's points are unsorted, so all of them are compared; the points after it lie at
+    /// `⌊x⌋ + 1` or above and never count).
+    #[inline(always)]
+    fn below(&self, mf: f64, c: f64) -> usize {
+        let m = self.first.len() - 2;
+        let x = mf * c;
+        let cell = floor_index(x).0.min(m);
+        let (mut i, end) = (self.first[cell], self.first[cell + 1]);
+        let mut k = i;
+        loop {
+            let p: &[f64; PAD] = self.pos[i..i + PAD].try_into().expect("PAD points");
+            k += usize::from(p[0] < x)
+                + usize::from(p[1] < x)
+                + usize::from(p[2] < x)
+                + usize::from(p[3] < x);
+            i += PAD;
+            if i >= end {
+                return k;
+            }
+        }
+    }
 }
 
 /// `out` ← `M = out.len()` independent draws from the weights `w(0), …, w(n − 1)` (summing
-/// to 1 up to rounding), in increasing order, in O(M + n).
-///
-/// 1. `S_0 … S_M`: unit exponentials from a [`LaneRng`] seeded by `rng`, summed ([`prefix4`]).
-/// 2. The bucket of a value `v ∈ [0, S_M]` is `b(v) = ⌊v·M/S_M⌋` (capped at `M`);
-///    `first[b] = #{i < M : b(S_i) < b}` for `b = 0 … M`, from a histogram of the points'
-///    buckets and its prefix sums.
-/// 3. Particle `j`'s boundary, the number of points below `key_j = C_j·S_M`, is
-///    `first[b(key_j)]` plus the points of that bucket below `key_j` (since `b` is
-///    monotone, points in lower buckets are below and points in higher buckets are not).
-///    Its ancestors are then written as runs (see [`offspring`](super::offspring)).
-pub(crate) fn sorted_draws<R: Rng + ?Sized>(
+/// to 1 up to rounding), in increasing order, in O(M + n): see [`Multinomial`].
+pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
     simd: Simd,
     n: usize,
     w: impl Fn(usize) -> f64,
@@ -62,56 +230,22 @@ pub(crate) fn sorted_draws<R: Rng + ?Sized>(
         return;
     }
     let mut lanes = LaneRng::from_rng(rng);
+    let mf = m as f64;
     SCRATCH.with(|cell| {
-        let mut guard = cell.borrow_mut();
-        let (s, first) = &mut *guard;
-        s.resize(m + 1 + PAD, 0.0);
-        first.resize(m + 2, 0);
+        let mut points = cell.borrow_mut();
         dispatch(
             simd,
             #[inline(always)]
             || {
-                let total = spacings(&mut lanes, &mut s[..m + 1]);
-                s[m + 1..].fill(f64::INFINITY);
-                let g = m as f64 / total;
-                let bucket = |v: f64| floor_index(v * g).0.min(m);
-                // first[b]: a histogram of the points' buckets (shifted by one), then its
-                // prefix sums. The buckets are computed SCAN at a time (vectorised).
-                first.fill(0);
-                let mut kb = [0usize; SCAN];
-                for block in s[..m].chunks(SCAN) {
-                    for (k, &v) in kb.iter_mut().zip(block) {
-                        *k = bucket(v) + 1;
-                    }
-                    for &k in &kb[..block.len()] {
-                        first[k] += 1;
-                    }
-                }
-                let mut acc = 0;
-                for f in first.iter_mut() {
-                    acc += *f;
-                    *f = acc;
-                }
-                let (s, first) = (&s[..], &first[..]);
+                points.draw(m, &mut lanes, rng);
+                let points = &*points;
                 walk(
                     n,
                     w,
+                    #[inline(always)]
                     |_, c, k| {
                         for (k, &c) in k.iter_mut().zip(c) {
-                            let key = c * total;
-                            let mut i = first[bucket(key)];
-                            loop {
-                                let p: &[f64; PAD] = s[i..i + PAD].try_into().expect("PAD points");
-                                let below = usize::from(p[0] < key)
-                                    + usize::from(p[1] < key)
-                                    + usize::from(p[2] < key)
-                                    + usize::from(p[3] < key);
-                                i += below;
-                                if below < PAD {
-                                    break;
-                                }
-                            }
-                            *k = i;
+                            *k = points.below(mf, c);
                         }
                     },
                     out,
@@ -121,50 +255,58 @@ pub(crate) fn sorted_draws<R: Rng + ?Sized>(
     });
 }
 
-/// `s[i] ← E_0 + … + E_i` for unit exponentials `E_i`; returns the last sum.
-#[inline(always)]
-fn spacings(lanes: &mut LaneRng, s: &mut [f64]) -> f64 {
-    lanes.fill_exp1_inline(s);
-    let mut carry = 0.0;
-    let mut e = [0.0f64; SCAN];
-    for block in s.chunks_mut(SCAN) {
-        let e = &mut e[..block.len()];
-        e.copy_from_slice(block);
-        carry = prefix4(e, carry, block);
-    }
-    carry
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::mc::stream_rng;
     use crate::resample::offspring::cumulative;
 
-    /// The bucket search gives the ancestors of the plain merge of the same sorted points
-    /// with the same cumulative weights, on both kernels, for M below, at and above N.
+    fn weights(n: usize, skew: i32) -> Vec<f64> {
+        let raw: Vec<f64> = (1..=n)
+            .map(|i| (((i * 17) % 11) as f64 + 0.3).powi(skew))
+            .collect();
+        let s: f64 = raw.iter().sum();
+        raw.iter().map(|x| x / s).collect()
+    }
+
+    /// The same points as `multinomial_draws(…, stream_rng(seed, r), …)` draws.
+    fn points(m: usize, seed: u64, r: u64) -> Points {
+        let mut rng = stream_rng(seed, r);
+        let mut lanes = LaneRng::from_rng(&mut rng);
+        let mut p = Points::new();
+        p.draw(m, &mut lanes, &mut rng);
+        p
+    }
+
+    /// The cell search gives the ancestors of the plain merge of the same points with the
+    /// same cumulative weights, on both kernels, for M below, at and above N.
     #[test]
-    fn bucket_search_equals_the_plain_merge_of_the_same_draws() {
+    fn cell_search_equals_the_plain_merge_of_the_same_points() {
         for (n, skew) in [(23usize, 1), (300, 4), (1, 1)] {
-            let w: Vec<f64> = {
-                let raw: Vec<f64> = (1..=n)
-                    .map(|i| (((i * 17) % 11) as f64 + 0.3).powi(skew))
-                    .collect();
-                let s: f64 = raw.iter().sum();
-                raw.iter().map(|x| x / s).collect()
-            };
+            let w = weights(n, skew);
             let c = cumulative(&w);
             for &m in &[1usize, 5, 23, 200, 301, 1000] {
-                // The same exponentials, summed the same way, merged plainly.
-                let mut lanes = LaneRng::from_rng(&mut stream_rng(9, m as u64));
-                let mut s = vec![0.0; m + 1];
-                let total = spacings(&mut lanes, &mut s);
+                let p = points(m, 9, m as u64);
+                assert_eq!(p.first[m], m);
+                // Every point as (cell, position), in cell order; point (f, p) lies
+                // below the key x when f < ⌊x⌋, or f = ⌊x⌋ and p < x.
+                let pts: Vec<(usize, f64)> = (0..m)
+                    .flat_map(|f| (p.first[f]..p.first[f + 1]).map(move |g| (f, g)))
+                    .map(|(f, g)| (f, p.pos[g]))
+                    .collect();
+                assert_eq!(pts.len(), m);
+                let below = |(f, p): (usize, f64), x: f64| {
+                    let fx = x.floor();
+                    (f as f64) < fx || ((f as f64) == fx && p < x)
+                };
+                let mut sorted = pts.clone();
+                sorted.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
                 let mut j = 0;
-                let plain: Vec<usize> = s[..m]
+                let plain: Vec<usize> = sorted
                     .iter()
-                    .map(|&si| {
-                        // First j whose key C_j·S_M exceeds the point.
-                        while j + 1 < n && si >= c[j] * total {
+                    .map(|&pt| {
+                        // First j whose key M·C_j is above the point.
+                        while j + 1 < n && !below(pt, m as f64 * c[j]) {
                             j += 1;
                         }
                         j
@@ -172,10 +314,91 @@ mod tests {
                     .collect();
                 for simd in [Simd::Auto, Simd::Portable] {
                     let mut fast = vec![0; m];
-                    sorted_draws(simd, n, |j| w[j], &mut stream_rng(9, m as u64), &mut fast);
+                    multinomial_draws(simd, n, |j| w[j], &mut stream_rng(9, m as u64), &mut fast);
                     assert_eq!(fast, plain, "N = {n}, M = {m}, {simd:?}");
                 }
             }
         }
+    }
+
+    /// The thresholds are the Poisson(1) distribution function, and stop where it rounds
+    /// to 1.
+    #[test]
+    fn thresholds_are_the_poisson_cdf() {
+        let mut cdf = 0.0;
+        let mut fact = 1.0;
+        for (k, &t) in POISSON1.iter().enumerate() {
+            if k > 0 {
+                fact *= k as f64;
+            }
+            cdf += (-1.0f64).exp() / fact;
+            let want = cdf.min(1.0) * 2f64.powi(53);
+            assert!(
+                (t as f64 - want).abs() <= 8.0,
+                "k = {k}: {t} against {want}"
+            );
+        }
+        assert_eq!(POISSON1[19], 1 << 53);
+    }
+
+    /// Whatever the size of the Poisson process, exactly M points come out, each within
+    /// its cell.
+    #[test]
+    fn conditioning_gives_exactly_m_points() {
+        for m in [1usize, 2, 3, 64, 65, 1000, 4097] {
+            for r in 0..20 {
+                let p = points(m, 5, r);
+                assert_eq!(p.first[0], 0);
+                assert_eq!(p.first[m], m);
+                assert!(p.first.windows(2).all(|w| w[0] <= w[1]));
+                for f in 0..m {
+                    for g in p.first[f]..p.first[f + 1] {
+                        assert!((f as f64..=f as f64 + 1.0).contains(&p.pos[g]), "{f}");
+                    }
+                }
+                assert!(p.pos[m..].iter().all(|&x| x == f64::INFINITY));
+            }
+        }
+    }
+
+    /// The joint law of the offspring counts of 3 particles from M = 4 draws is
+    /// Multinomial(4; W): chi-square over all 15 outcomes from 60 000 seeded draws (the
+    /// conditioning step acts in most of them, since T ~ Poisson(4)). With 14 degrees of
+    /// freedom, P(χ² > 36.1) = 0.001.
+    #[test]
+    fn offspring_counts_are_jointly_multinomial() {
+        let w = [0.5, 0.3, 0.2];
+        let m = 4usize;
+        let reps = 60_000;
+        let mut seen = std::collections::HashMap::new();
+        let mut rng = stream_rng(11, 0);
+        let mut out = [0usize; 4];
+        for _ in 0..reps {
+            multinomial_draws(Simd::Auto, 3, |j| w[j], &mut rng, &mut out);
+            let mut k = [0usize; 3];
+            for &a in &out {
+                k[a] += 1;
+            }
+            *seen.entry(k).or_insert(0usize) += 1;
+        }
+        let fact = |n: usize| (1..=n).product::<usize>() as f64;
+        let mut chi2 = 0.0;
+        let mut outcomes = 0;
+        for a in 0..=m {
+            for b in 0..=m - a {
+                let c = m - a - b;
+                let p = fact(m) / (fact(a) * fact(b) * fact(c))
+                    * w[0].powi(a as i32)
+                    * w[1].powi(b as i32)
+                    * w[2].powi(c as i32);
+                let e = p * reps as f64;
+                let o = seen.get(&[a, b, c]).copied().unwrap_or(0) as f64;
+                chi2 += (o - e).powi(2) / e;
+                outcomes += 1;
+            }
+        }
+        assert_eq!(outcomes, 15);
+        assert_eq!(seen.values().sum::<usize>(), reps);
+        assert!(chi2 < 36.1, "chi-square {chi2}");
     }
 }

@@ -1,7 +1,7 @@
 //! Residual resampling: deterministic copies, then multinomial on what is left.
 
 use super::Resample;
-use super::multinomial::sorted_draws;
+use super::multinomial::multinomial_draws;
 use super::offspring::{Runs, SCAN};
 use crate::simd::math::floor_index;
 use crate::simd::{Simd, dispatch};
@@ -9,7 +9,7 @@ use rand::Rng;
 
 /// Residual resampling (Liu & Chen 1998): particle `j` first gets `⌊M·W_j⌋` copies; the
 /// remaining `R = M − Σ⌊M·W_j⌋` are drawn multinomially from the residual weights
-/// `(M·W_j − ⌊M·W_j⌋)/R`, with the sorted-uniform multinomial of
+/// `(M·W_j − ⌊M·W_j⌋)/R`, with the O(N) multinomial of
 /// [`Multinomial`](super::Multinomial).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Residual;
@@ -54,7 +54,7 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
         let x = mf * w[j];
         (x - floor_index(x).1) * inv_r
     };
-    sorted_draws(simd, w.len(), residual, rng, &mut ancestors[k..]);
+    multinomial_draws(simd, w.len(), residual, rng, &mut ancestors[k..]);
 }
 
 #[cfg(test)]
@@ -80,7 +80,7 @@ mod tests {
             let k = want.len();
             let mut tail = vec![0; m - k];
             let inv_r = 1.0 / (m - k) as f64;
-            sorted_draws(
+            multinomial_draws(
                 Simd::Portable,
                 w.len(),
                 |j| {

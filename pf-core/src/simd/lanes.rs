@@ -72,10 +72,11 @@ impl LaneRng {
         }
     }
 
-    /// One lock-step xoshiro256++ step: one output per lane.
+    /// One lock-step xoshiro256++ step: one output per lane (the raw bits, for samplers
+    /// built on the lanes inside a dispatched kernel).
     #[inline(always)]
     #[allow(clippy::manual_rotate)] // `rotate_left` was lowered to scalar `rol`s here
-    fn step(&mut self) -> [u64; LANES] {
+    pub(crate) fn step(&mut self) -> [u64; LANES] {
         let [s0, s1, s2, s3] = &mut self.s;
         let mut out = [0u64; LANES];
         for l in 0..LANES {
