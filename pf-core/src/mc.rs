@@ -7,6 +7,7 @@
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 /// The engine's generator: xoshiro256++ (Blackman & Vigna 2021), fast, 2²⁵⁶ − 1 period,
 /// and seedable from 32 bytes.
@@ -33,6 +34,21 @@ pub fn stream_rng(seed: u64, r: u64) -> PfRng {
         chunk.copy_from_slice(&splitmix(state).to_le_bytes());
     }
     PfRng::from_seed(bytes)
+}
+
+/// How much Monte Carlo work an experiment does. Each experiment maps it to its own sizes
+/// (particles, replications, steps) and documents them; the paper crates and the report
+/// share this one scale.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Scale {
+    /// Seconds: few particles and runs, for tests and smoke checks; noisy figures.
+    Quick,
+    /// About a minute or less per experiment: the standard report.
+    #[default]
+    Default,
+    /// The paper's own sizes and replication counts.
+    Full,
 }
 
 /// Where replications run.
@@ -83,6 +99,20 @@ pub fn mean_and_se(x: &[f64]) -> (f64, f64) {
 mod tests {
     use super::*;
     use rand::RngExt;
+
+    /// The report's manifest and the experiments' JSON name the scale in lower case.
+    #[test]
+    fn scale_serialises_in_lower_case() {
+        for (s, name) in [
+            (Scale::Quick, "\"quick\""),
+            (Scale::Default, "\"default\""),
+            (Scale::Full, "\"full\""),
+        ] {
+            assert_eq!(serde_json::to_string(&s).unwrap(), name);
+            assert_eq!(serde_json::from_str::<Scale>(name).unwrap(), s);
+        }
+        assert_eq!(Scale::default(), Scale::Default);
+    }
 
     #[test]
     fn streams_differ_and_repeat() {

@@ -142,8 +142,9 @@ pub struct ReportArgs {
     pub no_rrd: bool,
 }
 
-/// How much Monte Carlo work a run does. Sections map it to replication counts and problem
-/// sizes; `Default` reproduces the papers' figures at a laptop-friendly cost.
+/// How much Monte Carlo work a run does: the command-line face of [`pf_core::mc::Scale`]
+/// (sections map it to replication counts and problem sizes; `Default` reproduces the
+/// papers' figures at a laptop-friendly cost).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Scale {
@@ -154,6 +155,16 @@ pub enum Scale {
     Default,
     /// The papers' own replication counts.
     Full,
+}
+
+impl From<Scale> for pf_core::mc::Scale {
+    fn from(s: Scale) -> Self {
+        match s {
+            Scale::Quick => Self::Quick,
+            Scale::Default => Self::Default,
+            Scale::Full => Self::Full,
+        }
+    }
 }
 
 /// Whether `.rrd` recordings are written.

@@ -24,21 +24,8 @@ pub use n_sweep::{NSweepConfig, NSweepResult, NSweepRow, n_sweep};
 /// Fig. 6's histograms are pf-core's (re-exported where they used to be defined).
 pub use pf_core::metrics::Histogram;
 
-use serde::{Deserialize, Serialize};
-
-/// How big an experiment is: `Quick` runs in seconds, `Default` in about a minute or less,
-/// `Full` at the paper's sizes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Scale {
-    /// Seconds: few particles and runs, for tests and smoke checks.
-    Quick,
-    /// About a minute or less.
-    #[default]
-    Default,
-    /// The paper's sizes (and the whole `N` range of the sweep).
-    Full,
-}
+/// The experiments' size presets, shared with the other paper crates.
+pub use pf_core::mc::Scale;
 
 /// The stream seed of filter runs, kept apart from the simulation's streams.
 pub(crate) fn filter_seed(seed: u64) -> u64 {

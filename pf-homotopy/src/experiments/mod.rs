@@ -25,17 +25,5 @@ pub use geometry::{GeometryCell, GeometryConfig, GeometryResult, geometry};
 pub use information::{InformationConfig, InformationResult, information};
 pub use rmse::{PerAlgorithm, RmseConfig, RmseResult, final_squared_errors, rmse};
 
-use serde::{Deserialize, Serialize};
-
-/// Size presets of the Monte Carlo experiments.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Scale {
-    /// Seconds: a handful of realisations, a small PF.
-    Quick,
-    /// About a minute on two cores.
-    #[default]
-    Default,
-    /// The paper's sizes: 500 realisations, N = 100 000.
-    Full,
-}
+/// The experiments' size presets, shared with the other paper crates.
+pub use pf_core::mc::Scale;

@@ -19,17 +19,5 @@ pub use tables::{
     table3,
 };
 
-use serde::{Deserialize, Serialize};
-
-/// How big an experiment is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Scale {
-    /// Seconds: for tests and smoke runs.
-    Quick,
-    /// A minute or less.
-    #[default]
-    Default,
-    /// The paper's sizes.
-    Full,
-}
+/// The experiments' size presets, shared with the other paper crates.
+pub use pf_core::mc::Scale;

@@ -7,7 +7,6 @@
 use serde::Serialize;
 
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
-use crate::cli::Scale;
 use crate::error::{Result, VizError};
 use crate::png::histogram::{self, HistData, HistPanel, HistStats, HistogramPlot};
 use crate::png::line::{self, Band, LinePlot, Series};
@@ -39,14 +38,6 @@ struct DredgeResult {
     fig8: Fig8Result,
     n_sweep_config: NSweepConfig,
     n_sweep: NSweepResult,
-}
-
-fn scale(s: Scale) -> ex::Scale {
-    match s {
-        Scale::Quick => ex::Scale::Quick,
-        Scale::Default => ex::Scale::Default,
-        Scale::Full => ex::Scale::Full,
-    }
 }
 
 const PAPER: &str = "dredge";
@@ -102,7 +93,7 @@ fn plot(title: &str, y_label: &str, series: Vec<Series>, legend: LegendPos) -> L
 }
 
 fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
-    let sc = scale(ctx.scale);
+    let sc = ctx.scale;
     let err = VizError::paper(PAPER);
     let seed = ctx.seed;
     let bar = ctx.progress.bar("dredge", 5);

@@ -23,11 +23,11 @@ use pf_epf::tracker::{EnergyTable, Record, TrackResult, TrackerConfig, energies_
 use serde::{Deserialize, Serialize};
 
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
-use crate::cli::Scale;
 use crate::error::{Result, VizError};
 use crate::png::rec::{RecPanel, RecPlot, RecSeries};
 use crate::png::style::LegendPos;
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle, render_grid};
+use pf_core::mc::Scale;
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {

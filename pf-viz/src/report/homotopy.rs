@@ -11,19 +11,18 @@
 use pf_core::gaussian::ErrorEllipse;
 use pf_homotopy::experiments::{
     AblationConfig, AblationResult, EllipsesConfig, EllipsesResult, GeometryConfig, GeometryResult,
-    InformationConfig, InformationResult, PerAlgorithm, RmseConfig, RmseResult, Scale as HScale,
-    ScenarioGeometry, ablation, ellipses, geometry as geometry_sweep, information, rmse,
-    scenario_geometry,
+    InformationConfig, InformationResult, PerAlgorithm, RmseConfig, RmseResult, ScenarioGeometry,
+    ablation, ellipses, geometry as geometry_sweep, information, rmse, scenario_geometry,
 };
 use serde::Serialize;
 
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
-use crate::cli::Scale;
 use crate::error::{Result, VizError};
 use crate::png;
 use crate::png::line::{LinePlot, RefLine, Series};
 use crate::png::style::LegendPos;
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle};
+use pf_core::mc::Scale;
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
@@ -64,11 +63,7 @@ fn to_ellipse(e: &pf_homotopy::experiments::Ellipse) -> ErrorEllipse {
 fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     let homotopy = VizError::paper("homotopy");
     let seed = ctx.seed;
-    let sc = match ctx.scale {
-        Scale::Quick => HScale::Quick,
-        Scale::Default => HScale::Default,
-        Scale::Full => HScale::Full,
-    };
+    let sc = ctx.scale;
     let bar = ctx.progress.bar("homotopy", 5);
     let scenario = pf_homotopy::model::ScenarioConfig::default();
     let geometry = scenario_geometry(&scenario).map_err(homotopy)?;

@@ -21,9 +21,10 @@ use std::path::{Path, PathBuf};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
 
-use crate::cli::{ReportArgs, RrdOutput, Scale};
+use crate::cli::{ReportArgs, RrdOutput};
 use crate::error::{Result, VizError};
 use crate::io::{prepare_out_dir, write_json};
+use pf_core::mc::Scale;
 
 /// Every report section, in the order they run and appear in `summary.json`.
 pub const SECTIONS: &[Section] = &[
@@ -233,7 +234,7 @@ fn run_sections(args: &ReportArgs, selected: &[&'static Section]) -> Result<Summ
     let ctx = Context {
         out_dir: &args.out,
         seed: args.seed,
-        scale: args.scale,
+        scale: args.scale.into(),
         rrd: RrdOutput::from_flag(args.no_rrd),
         progress: &progress,
     };

@@ -9,18 +9,18 @@
 //! on the `step` timeline.
 
 use pf_mpf::experiments::{
-    Fig3Config, Fig3Result, RatioConfig, RatioResult, Scale as MpfScale, TableConfig, TableReport,
-    fig3, ratio, table2, table3,
+    Fig3Config, Fig3Result, RatioConfig, RatioResult, TableConfig, TableReport, fig3, ratio,
+    table2, table3,
 };
 use serde::Serialize;
 
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
-use crate::cli::Scale;
 use crate::error::{Result, VizError};
 use crate::png;
 use crate::png::line::{LinePlot, RefLine, Series};
 use crate::png::style::LegendPos;
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle};
+use pf_core::mc::Scale;
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
@@ -51,17 +51,9 @@ pub struct MpfResult {
     pub recorded_particles: usize,
 }
 
-fn mpf_scale(s: Scale) -> MpfScale {
-    match s {
-        Scale::Quick => MpfScale::Quick,
-        Scale::Default => MpfScale::Default,
-        Scale::Full => MpfScale::Full,
-    }
-}
-
 fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     let mpf = VizError::paper("mpf");
-    let scale = mpf_scale(ctx.scale);
+    let scale = ctx.scale;
     let bar = ctx.progress.bar("mpf", 4);
     bar.set_message("Figs. 1-2");
     let ratio_result = ratio(&RatioConfig::default()).map_err(mpf)?;

@@ -26,7 +26,6 @@ use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
-use crate::cli::Scale;
 use crate::error::{Result, VizError};
 use crate::png;
 use crate::png::boxplot::{BoxGroup, BoxPanel, BoxPlot, BoxStats};
@@ -34,6 +33,7 @@ use crate::png::genealogy::{GenealogyData, GenealogyLabels};
 use crate::png::line::RefLine;
 use crate::png::style::LegendPos;
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle};
+use pf_core::mc::Scale;
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
