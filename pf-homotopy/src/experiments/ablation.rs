@@ -5,8 +5,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::Scale;
-use super::rmse::{RmseConfig, final_squared_errors};
-use crate::error::{HomotopyError, Result};
+use super::rmse::{RmseConfig, final_squared_errors, validate_runs};
+use crate::error::Result;
 use crate::filters::{Algorithm, FilterSettings};
 use crate::model::ScenarioConfig;
 use crate::ohf::OhfConfig;
@@ -50,16 +50,7 @@ impl AblationConfig {
 
     /// Check the settings.
     pub fn validate(&self) -> Result<()> {
-        self.scenario.validate()?;
-        self.filters.validate()?;
-        if self.realisations == 0 {
-            return Err(HomotopyError::InvalidParameter {
-                name: "realisations R",
-                value: 0.0,
-                reason: "at least one realisation is needed",
-            });
-        }
-        Ok(())
+        validate_runs(&self.scenario, &self.filters, self.realisations)
     }
 }
 

@@ -70,6 +70,24 @@ impl Default for RmseConfig {
     }
 }
 
+/// The checks every Monte Carlo experiment over realisations of the scenario shares.
+pub(crate) fn validate_runs(
+    scenario: &ScenarioConfig,
+    filters: &FilterSettings,
+    realisations: usize,
+) -> Result<()> {
+    scenario.validate()?;
+    filters.validate()?;
+    if realisations == 0 {
+        return Err(HomotopyError::InvalidParameter {
+            name: "realisations R",
+            value: 0.0,
+            reason: "at least one realisation is needed",
+        });
+    }
+    Ok(())
+}
+
 impl RmseConfig {
     /// The paper's settings at a size preset: quick 8 realisations with N = 2000,
     /// default 40 realisations with N = 10 000, full 500 with N = 100 000.
@@ -92,16 +110,7 @@ impl RmseConfig {
 
     /// Check the settings.
     pub fn validate(&self) -> Result<()> {
-        self.scenario.validate()?;
-        self.filters.validate()?;
-        if self.realisations == 0 {
-            return Err(HomotopyError::InvalidParameter {
-                name: "realisations R",
-                value: 0.0,
-                reason: "at least one realisation is needed",
-            });
-        }
-        Ok(())
+        validate_runs(&self.scenario, &self.filters, self.realisations)
     }
 }
 

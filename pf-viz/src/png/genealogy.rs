@@ -13,6 +13,8 @@
 
 use std::path::Path;
 
+use pf_core::genealogy::Genealogy;
+use pf_core::observe::CloudRecorder;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -42,6 +44,20 @@ pub struct GenealogyData {
 }
 
 impl GenealogyData {
+    /// The figure's data from a filter run's recorders: the clouds' positions and the
+    /// genealogy's parents, survivors and coalescence time.
+    pub fn recorded(clouds: &CloudRecorder<f64>, g: &Genealogy, truth: Option<Vec<f64>>) -> Self {
+        GenealogyData {
+            positions: clouds.positions(),
+            ancestors: (0..g.n_steps())
+                .map(|k| g.ancestors(k).map(<[usize]>::to_vec).unwrap_or_default())
+                .collect(),
+            surviving: g.alive_per_step(),
+            coalescence_time: g.coalescence_time(),
+            truth,
+        }
+    }
+
     /// Number of steps `n + 1`.
     pub fn n_steps(&self) -> usize {
         self.positions.len()

@@ -147,18 +147,7 @@ pub fn run(ctx: &Context<'_>, config: CoreConfig) -> Result<CoreResult> {
     let summary = pf.run(&obs, None, &mut rng, &mut observers).map_err(core)?;
     let (clouds, genealogy, ess_rec) = observers;
     let g = genealogy.genealogy();
-
-    let steps = g.n_steps();
-    let ancestors: Vec<Vec<usize>> = (0..steps)
-        .map(|k| g.ancestors(k).map(<[usize]>::to_vec).unwrap_or_default())
-        .collect();
-    let data = GenealogyData {
-        positions: clouds.positions(),
-        ancestors,
-        surviving: g.alive_per_step(),
-        coalescence_time: g.coalescence_time(),
-        truth: Some(xs),
-    };
+    let data = GenealogyData::recorded(&clouds, g, Some(xs));
     let weights: Vec<Vec<f64>> = clouds.clouds.iter().map(|c| c.weights.clone()).collect();
     let ess = ess_rec.ess();
     let surviving_per_step = g.surviving_counts();
@@ -176,7 +165,7 @@ pub fn run(ctx: &Context<'_>, config: CoreConfig) -> Result<CoreResult> {
     png::genealogy::render(&ctx.path("genealogy.png"), &data, &labels)?;
     files.push("genealogy.png".to_owned());
 
-    let step_axis: Vec<f64> = (0..steps).map(|k| k as f64).collect();
+    let step_axis: Vec<f64> = (0..g.n_steps()).map(|k| k as f64).collect();
     let ess_plot = LinePlot {
         title: format!("Effective sample size and surviving ancestors, N = {n_particles}"),
         x_label: "time index k (steps)".into(),

@@ -434,17 +434,7 @@ fn genealogy(ctx: &Context<'_>, config: &SmoothConfig, data: &Ar1Data, xs: &[f64
     )
     .map_err(core)?;
     let (clouds, recorder, ess) = obs;
-    let g = recorder.genealogy();
-    let ancestors = (0..g.n_steps())
-        .map(|k| g.ancestors(k).map(<[usize]>::to_vec).unwrap_or_default())
-        .collect();
-    let data = GenealogyData {
-        positions: clouds.positions(),
-        ancestors,
-        surviving: g.alive_per_step(),
-        coalescence_time: g.coalescence_time(),
-        truth: Some(xs[..=d.n()].to_vec()),
-    };
+    let data = GenealogyData::recorded(&clouds, recorder.genealogy(), Some(xs[..=d.n()].to_vec()));
     Ok(Fig1 {
         data,
         weights: clouds.clouds.iter().map(|c| c.weights.clone()).collect(),
