@@ -23,14 +23,15 @@ use std::cell::RefCell;
 ///    independent uniforms, so exactly `M` independent uniforms remain. (Points within a
 ///    cell are exchangeable, so removing one of a cell's points is removing its last.)
 ///    `|T − M|` is of order `√M`, drawn from the caller's generator.
-/// 3. **Offsets.** Point `g` of cell `f` sits at `(f + u_g)/M` with `u_g` uniform on
-///    [0, 1), drawn after the counts are final; a cell's points are not sorted, only
-///    counted.
+/// 3. **Offsets.** Point `g` of cell `f` sits at `p_g = f + u_g` (in units of `1/M`) with
+///    `u_g` uniform on [0, 1), drawn after the counts are final; a cell's points are not
+///    sorted, only counted.
 ///
 /// Particle `j`'s boundary, the number of points below its cumulative weight `C_j`, is
-/// with `x = M·C_j` and `f = ⌊x⌋`: every point of the cells before `f`, plus the points of
-/// cell `f` with `u_g < x − f` (one comparison on average; four without a loop). The
-/// counts and offsets come from a [`LaneRng`] seeded from the caller's generator. The
+/// with `x = M·C_j` and `f = ⌊x⌋`: every point of the cells before `f` (from a table of
+/// the cells' first points), plus the points of cell `f` with `p_g < x` (one on average,
+/// compared four at a time). The counts and offsets come from a [`LaneRng`] seeded from
+/// the caller's generator. The
 /// ancestors are exactly those of the textbook merge of the same points with the same
 /// cumulative weights (tested), and the joint law of the offspring counts is multinomial
 /// (tested by a chi-square over every outcome of a small case).
@@ -47,8 +48,8 @@ impl Resample for Multinomial {
 const PAD: usize = 4;
 
 /// Poisson(1) thresholds: with `v` a uniform 53-bit integer, `#{k : v ≥ T_k}` is a
-/// Poisson(1) count (`T_k = 2⁵³·P(N ≤ k)`, exact to 2⁻⁵³ per outcome; from `k = 18` on
-/// `P(N ≤ k)` rounds to 1 and the count stops).
+/// Poisson(1) count (`T_k = 2⁵³·P(N ≤ k)`, exact to 2⁻⁵³ per outcome; by `k = 19`,
+/// `P(N ≤ k)` has rounded to 1 and the count stops).
 const POISSON1: [u64; 20] = poisson1_thresholds();
 
 /// Thresholds compared in the vectorised pass; counts of `QUICK` or more (probability
