@@ -98,6 +98,19 @@ pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<()> {
     }
 }
 
+/// Reject a non-finite bearing `y_k`.
+pub(crate) fn check_bearing(k: usize, value: f64) -> Result<()> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(HomotopyError::NonFiniteData {
+            what: "bearing",
+            k,
+            value,
+        })
+    }
+}
+
 /// Reject a non-finite value of parameter `name`.
 pub(crate) fn check_finite(name: &'static str, value: f64) -> Result<()> {
     if value.is_finite() {

@@ -17,7 +17,7 @@ use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{HomotopyError, Result, check_finite, check_positive};
+use crate::error::{HomotopyError, Result, check_bearing, check_finite, check_positive};
 use pf_core::geometry::wrap_angle;
 
 /// The target state `[x, y, ẋ, ẏ]`.
@@ -314,13 +314,7 @@ impl Realisation {
         }
         for (i, (&y, o)) in bearings.iter().zip(observer).enumerate() {
             let k = i + 1;
-            if !y.is_finite() {
-                return Err(HomotopyError::NonFiniteData {
-                    what: "bearing",
-                    k,
-                    value: y,
-                });
-            }
+            check_bearing(k, y)?;
             for &v in o.pos.iter().chain(&o.vel) {
                 if !v.is_finite() {
                     return Err(HomotopyError::NonFiniteData {

@@ -10,7 +10,7 @@
 
 use nalgebra::{Matrix2, Matrix4, Vector2};
 
-use crate::error::{HomotopyError, Result};
+use crate::error::{Result, check_bearing};
 use crate::model::{Realisation, ScenarioConfig};
 use crate::ohf::{OhfConfig, OhfDiagnostics, OhfWorkspace, correct};
 use crate::param::Gaussian;
@@ -46,13 +46,7 @@ impl OhfTracker {
         scenario.validate()?;
         config.validate()?;
         grid.validate()?;
-        if !y1.is_finite() {
-            return Err(HomotopyError::NonFiniteData {
-                what: "bearing",
-                k: 1,
-                value: y1,
-            });
-        }
+        check_bearing(1, y1)?;
         Ok(Self {
             config,
             grid,
@@ -112,13 +106,7 @@ impl OhfTracker {
         record_at: &[f64],
         on_lambda: impl FnMut(f64, &Gaussian<2>),
     ) -> Result<()> {
-        if !y.is_finite() {
-            return Err(HomotopyError::NonFiniteData {
-                what: "bearing",
-                k,
-                value: y,
-            });
-        }
+        check_bearing(k, y)?;
         let prior_p = self.position();
         let quad = PolarGrid::new(self.grid, rho, y, self.sigma);
         let merged;

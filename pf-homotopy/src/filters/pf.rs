@@ -22,7 +22,7 @@ use pf_core::{Proposal, StateSpaceModel, TransitionDensity};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::error::{HomotopyError, Result};
+use crate::error::{HomotopyError, Result, check_bearing};
 use crate::model::bearing;
 use crate::model::{PriorConfig, Realisation, ScenarioConfig, State};
 use crate::prior::sample_prior;
@@ -53,13 +53,7 @@ impl BotModel {
     /// An invalid scenario, or non-finite inputs.
     pub fn new(scenario: &ScenarioConfig, observer: Vec<[f64; 2]>, y1: f64) -> Result<Self> {
         scenario.validate()?;
-        if !y1.is_finite() {
-            return Err(HomotopyError::NonFiniteData {
-                what: "bearing",
-                k: 1,
-                value: y1,
-            });
-        }
+        check_bearing(1, y1)?;
         let q = scenario.q_matrix();
         let chol = q.cholesky().ok_or(HomotopyError::InvalidParameter {
             name: "q",

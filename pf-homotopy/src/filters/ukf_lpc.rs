@@ -22,7 +22,7 @@
 use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 use pf_core::kalman::{KalmanState, Ukf, UkfParams};
 
-use crate::error::{HomotopyError, Result};
+use crate::error::{Result, check_bearing};
 use crate::model::bearing;
 use crate::model::{ObserverState, Realisation, ScenarioConfig};
 use pf_core::geometry::wrap_angle;
@@ -93,13 +93,7 @@ impl UkfLpc {
         o1: &ObserverState,
     ) -> Result<Self> {
         scenario.validate()?;
-        if !y1.is_finite() {
-            return Err(HomotopyError::NonFiniteData {
-                what: "bearing",
-                k: 1,
-                value: y1,
-            });
-        }
+        check_bearing(1, y1)?;
         let pr = scenario.prior;
         let sigma = scenario.sigma();
         let mut ukf = Ukf::new(params)?;
