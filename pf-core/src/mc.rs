@@ -51,6 +51,36 @@ pub enum Scale {
     Full,
 }
 
+impl Scale {
+    /// Every preset, smallest first.
+    pub const ALL: [Scale; 3] = [Scale::Quick, Scale::Default, Scale::Full];
+
+    /// The lower-case name used in configs and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scale::Quick => "quick",
+            Scale::Default => "default",
+            Scale::Full => "full",
+        }
+    }
+}
+
+impl std::str::FromStr for Scale {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        Scale::ALL
+            .into_iter()
+            .find(|v| v.name() == s)
+            .ok_or_else(|| format!("unknown scale '{s}' (expected quick, default or full)"))
+    }
+}
+
+impl std::fmt::Display for Scale {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Where replications run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Par {
@@ -100,17 +130,17 @@ mod tests {
     use super::*;
     use rand::RngExt;
 
-    /// The report's manifest and the experiments' JSON name the scale in lower case.
+    /// The report's manifest, the experiments' JSON and the command line all name the
+    /// scale in lower case, the same way.
     #[test]
-    fn scale_serialises_in_lower_case() {
-        for (s, name) in [
-            (Scale::Quick, "\"quick\""),
-            (Scale::Default, "\"default\""),
-            (Scale::Full, "\"full\""),
-        ] {
-            assert_eq!(serde_json::to_string(&s).unwrap(), name);
-            assert_eq!(serde_json::from_str::<Scale>(name).unwrap(), s);
+    fn scale_names_round_trip() {
+        for s in Scale::ALL {
+            let quoted = format!("\"{}\"", s.name());
+            assert_eq!(serde_json::to_string(&s).unwrap(), quoted);
+            assert_eq!(serde_json::from_str::<Scale>(&quoted).unwrap(), s);
+            assert_eq!(s.to_string().parse::<Scale>(), Ok(s));
         }
+        assert!("huge".parse::<Scale>().unwrap_err().contains("huge"));
         assert_eq!(Scale::default(), Scale::Default);
     }
 

@@ -3,7 +3,7 @@
 use std::ffi::OsString;
 use std::path::PathBuf;
 
-use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
+use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use serde::{Deserialize, Serialize};
 
 /// `pf-viz`: figures, tables and Rerun recordings for the pf papers.
@@ -127,9 +127,10 @@ pub struct ReportArgs {
     /// Master seed; every section derives its random streams from it.
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
-    /// How much Monte Carlo work to do.
-    #[arg(long, value_enum, default_value_t = Scale::Default)]
-    pub scale: Scale,
+    /// How much Monte Carlo work to do: `quick` (a smoke test: seconds, noisy figures),
+    /// `default` (the standard report) or `full` (the papers' own replication counts).
+    #[arg(long, value_name = "SCALE", default_value = "default")]
+    pub scale: pf_core::mc::Scale,
     /// Run only these sections (comma-separated), e.g. `smooth,epf`.
     #[arg(long, value_name = "SECTIONS", value_delimiter = ',')]
     pub only: Vec<String>,
@@ -140,31 +141,6 @@ pub struct ReportArgs {
     /// Do not write Rerun `.rrd` recordings.
     #[arg(long)]
     pub no_rrd: bool,
-}
-
-/// How much Monte Carlo work a run does: the command-line face of [`pf_core::mc::Scale`]
-/// (sections map it to replication counts and problem sizes; `Default` reproduces the
-/// papers' figures at a laptop-friendly cost).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Scale {
-    /// A smoke test: seconds, noisy figures.
-    Quick,
-    /// The standard report.
-    #[default]
-    Default,
-    /// The papers' own replication counts.
-    Full,
-}
-
-impl From<Scale> for pf_core::mc::Scale {
-    fn from(s: Scale) -> Self {
-        match s {
-            Scale::Quick => Self::Quick,
-            Scale::Default => Self::Default,
-            Scale::Full => Self::Full,
-        }
-    }
 }
 
 /// Whether `.rrd` recordings are written.

@@ -25,17 +25,6 @@ pub enum HomotopyCommand {
     Ellipses(EllipsesArgs),
 }
 
-/// Size presets of `rmse`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum RmseScale {
-    /// 8 realisations, a 2 000-particle PF.
-    Quick,
-    /// 40 realisations, a 10 000-particle PF.
-    Default,
-    /// The paper's: 500 realisations, a 100 000-particle PF.
-    Full,
-}
-
 /// Direction of the observer's 30°/s turn (the paper does not say).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Turn {
@@ -84,9 +73,11 @@ pub struct RmseArgs {
     /// Seed: realisation r uses stream (S, r).
     #[arg(long, value_name = "S", default_value_t = 0)]
     pub seed: u64,
-    /// Size preset for what the flags leave unset.
-    #[arg(long, value_enum, default_value_t = RmseScale::Default)]
-    pub scale: RmseScale,
+    /// Size preset for what the flags leave unset: `quick` (8 realisations, a
+    /// 2 000-particle PF), `default` (40 realisations, a 10 000-particle PF) or `full` (the
+    /// paper's: 500 realisations, a 100 000-particle PF).
+    #[arg(long, value_name = "SCALE", default_value = "default")]
+    pub scale: Scale,
     /// The unstated scenario values.
     #[command(flatten)]
     pub scenario: ScenarioArgs,
@@ -120,11 +111,7 @@ pub fn run(cmd: HomotopyCommand) -> Result<()> {
     let homotopy = VizError::paper("homotopy");
     match cmd {
         HomotopyCommand::Rmse(a) => {
-            let mut cfg = RmseConfig::at_scale(match a.scale {
-                RmseScale::Quick => Scale::Quick,
-                RmseScale::Default => Scale::Default,
-                RmseScale::Full => Scale::Full,
-            });
+            let mut cfg = RmseConfig::at_scale(a.scale);
             cfg.seed = a.seed;
             cfg.scenario = a.scenario.scenario();
             if let Some(r) = a.realisations {

@@ -52,27 +52,6 @@ pub struct CalibrateArgs {
     pub json: bool,
 }
 
-/// Size of a table experiment.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum TableScale {
-    /// Seconds: 150 particles, 4 runs, 20 steps.
-    Quick,
-    /// About a minute: 1000 particles, 16 runs, 50 steps.
-    Default,
-    /// The paper's: 2000 particles, N_MC = 100, 100 steps.
-    Full,
-}
-
-impl From<TableScale> for Scale {
-    fn from(s: TableScale) -> Scale {
-        match s {
-            TableScale::Quick => Scale::Quick,
-            TableScale::Default => Scale::Default,
-            TableScale::Full => Scale::Full,
-        }
-    }
-}
-
 /// Arguments of `pf-viz mpf table2|table3`.
 #[derive(Debug, Clone, Args)]
 pub struct TableArgs {
@@ -82,9 +61,11 @@ pub struct TableArgs {
     /// Seed of the measurement noise and of the filters.
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
-    /// Problem size: particles of the standard PF, N_MC and time steps.
-    #[arg(long, value_enum, default_value_t = TableScale::Default)]
-    pub scale: TableScale,
+    /// Problem size: `quick` (seconds: 150 particles, 4 runs, 20 steps), `default` (about
+    /// a minute: 1000 particles, 16 runs, 50 steps) or `full` (the paper's: 2000
+    /// particles, N_MC = 100, 100 steps).
+    #[arg(long, value_name = "SCALE", default_value = "default")]
+    pub scale: Scale,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -221,7 +202,7 @@ fn table(
     run: fn(&TableConfig) -> pf_mpf::Result<TableReport>,
     which: &str,
 ) -> Result<()> {
-    let mut cfg = TableConfig::at(a.scale.into());
+    let mut cfg = TableConfig::at(a.scale);
     cfg.seed = a.seed;
     if let Some(mc) = a.mc {
         if mc == 0 {

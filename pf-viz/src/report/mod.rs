@@ -234,7 +234,7 @@ fn run_sections(args: &ReportArgs, selected: &[&'static Section]) -> Result<Summ
     let ctx = Context {
         out_dir: &args.out,
         seed: args.seed,
-        scale: args.scale.into(),
+        scale: args.scale,
         rrd: RrdOutput::from_flag(args.no_rrd),
         progress: &progress,
     };
