@@ -1,7 +1,7 @@
 //! Multinomial resampling in O(N): a Poisson process of points, conditioned on its size.
 
 use super::Resample;
-use super::offspring::walk;
+use super::offspring::{Runs, walk};
 use crate::simd::LANES;
 use crate::simd::math::floor_index;
 use crate::simd::{LaneRng, Simd, dispatch};
@@ -174,14 +174,11 @@ impl Points {
         first[m] = start;
         first[m + 1] = start;
         debug_assert_eq!(start, m);
-        // Positions f + u_g: each cell's index written over its points as a run (four
-        // at once, the next run overwriting the surplus), then uniform offsets added.
-        for f in 0..m {
-            let (a, b) = (first[f], first[f + 1]);
-            pos[a..a + PAD].copy_from_slice(&[f as f64; PAD]);
-            if b > a + PAD {
-                pos[a + PAD..b].fill(f as f64);
-            }
+        // Positions f + u_g: each cell's index written over its points as a run, then
+        // uniform offsets added.
+        let mut runs = Runs::new();
+        for (f, &end) in first[1..=m].iter().enumerate() {
+            runs.push(&mut pos[..m], f as f64, end);
         }
         for u in pos[..m].chunks_mut(LANES) {
             let bits = lanes.step();

@@ -59,7 +59,7 @@ impl Runs {
     /// copies go out with one vector store whatever the count; the next run overwrites the
     /// surplus. Returns whether `out` is full.
     #[inline(always)]
-    pub(crate) fn push(&mut self, out: &mut [usize], value: usize, k: usize) -> bool {
+    pub(crate) fn push<T: Copy>(&mut self, out: &mut [T], value: T, k: usize) -> bool {
         let m = out.len();
         let (pos, k) = (self.pos, k.min(m));
         if pos + PAD <= m {
