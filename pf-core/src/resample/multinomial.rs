@@ -259,6 +259,37 @@ mod tests {
     use crate::mc::stream_rng;
     use crate::resample::offspring::cumulative;
 
+    /// The 0.999 quantile of chi-square with `df` degrees of freedom (Wilson–Hilferty,
+    /// within 1 % for `df ≥ 2`).
+    fn chi2_999(df: usize) -> f64 {
+        let k = df as f64;
+        let h = 2.0 / (9.0 * k);
+        k * (1.0 - h + 3.090_232 * h.sqrt()).powi(3)
+    }
+
+    /// Pearson's statistic of `observed` counts against the probabilities `pmf(k)`, the
+    /// outcomes pooled so that every bin expects at least 5 (the last bin takes every
+    /// larger outcome); returns it with its degrees of freedom.
+    fn chi2(observed: &[usize], pmf: impl Fn(usize) -> f64) -> (f64, usize) {
+        let reps = observed.iter().sum::<usize>() as f64;
+        let (mut stat, mut bins) = (0.0, 0);
+        let (mut o, mut e, mut tail) = (0.0, 0.0, 1.0);
+        for (k, &ok) in observed.iter().enumerate() {
+            let p = pmf(k);
+            tail -= p;
+            o += ok as f64;
+            e += p * reps;
+            if e >= 5.0 && tail * reps >= 5.0 {
+                stat += (o - e).powi(2) / e;
+                bins += 1;
+                (o, e) = (0.0, 0.0);
+            }
+        }
+        let e = e + tail.max(0.0) * reps;
+        stat += (o - e).powi(2) / e;
+        (stat, bins)
+    }
+
     fn weights(n: usize, skew: i32) -> Vec<f64> {
         let raw: Vec<f64> = (1..=n)
             .map(|i| (((i * 17) % 11) as f64 + 0.3).powi(skew))
@@ -398,5 +429,47 @@ mod tests {
         assert_eq!(outcomes, 15);
         assert_eq!(seen.values().sum::<usize>(), reps);
         assert!(chi2 < 36.1, "chi-square {chi2}");
+    }
+
+    /// With one heavy particle (its cumulative weight spans many cells) and two light ones,
+    /// each particle's count is Binomial(M, W_j): chi-square per particle over 20 000 draws.
+    #[test]
+    fn marginals_are_binomial_when_one_weight_dominates() {
+        let w = [0.05, 0.9, 0.05];
+        let m = 40usize;
+        let mut hist = [[0usize; 41]; 3];
+        let mut rng = stream_rng(12, 0);
+        let mut out = vec![0usize; m];
+        for _ in 0..20_000 {
+            multinomial_draws(Simd::Auto, 3, |j| w[j], &mut rng, &mut out);
+            let mut k = [0usize; 3];
+            for &a in &out {
+                k[a] += 1;
+            }
+            for (h, &kj) in hist.iter_mut().zip(&k) {
+                h[kj] += 1;
+            }
+        }
+        for (j, h) in hist.iter().enumerate() {
+            let p = w[j];
+            let ln_pmf = |k: usize| {
+                let ln_choose: f64 = (1..=k).map(|i| ((m - k + i) as f64 / i as f64).ln()).sum();
+                ln_choose + k as f64 * p.ln() + (m - k) as f64 * (1.0 - p).ln()
+            };
+            let (stat, df) = chi2(h, |k| ln_pmf(k).exp());
+            assert!(
+                stat < chi2_999(df.max(2)),
+                "particle {j}: χ² {stat} on {df} df"
+            );
+        }
+    }
+
+    /// Weights with no mass give every draw to the last particle, as the cumulative-weight
+    /// schemes do, and never hang.
+    #[test]
+    fn zero_weights_go_to_the_last_particle() {
+        let mut out = vec![7usize; 10];
+        multinomial_draws(Simd::Auto, 3, |_| 0.0, &mut stream_rng(1, 0), &mut out);
+        assert!(out.iter().all(|&a| a == 2));
     }
 }
