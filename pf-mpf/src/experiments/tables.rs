@@ -113,6 +113,26 @@ pub struct TableRow {
     pub time_s: f64,
 }
 
+impl TableRow {
+    /// One line comparing this row with the paper's, the paper's values in brackets.
+    pub fn against(&self, paper: &TableRow) -> String {
+        format!(
+            "{}: N = {} [{}], RMSE pos {:.2} [{:.2}] vel {:.2} [{:.2}] acc {:.2} [{:.2}], {:.3} s [{:.2}]",
+            self.name,
+            self.n,
+            paper.n,
+            self.rmse_pos,
+            paper.rmse_pos,
+            self.rmse_vel,
+            paper.rmse_vel,
+            self.rmse_acc,
+            paper.rmse_acc,
+            self.time_s,
+            paper.time_s
+        )
+    }
+}
+
 /// A table as `pf-viz mpf table2|table3 --json` prints it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TableResult {

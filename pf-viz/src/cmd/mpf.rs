@@ -226,20 +226,7 @@ fn table(
         cfg.n_mc
     );
     for (ours, paper) in r.table.partitions.iter().zip(&r.paper.partitions) {
-        println!(
-            "  {}: N = {} [{}], RMSE pos {:.2} [{:.2}] vel {:.2} [{:.2}] acc {:.2} [{:.2}], {:.3} s [{:.2}]",
-            ours.name,
-            ours.n,
-            paper.n,
-            ours.rmse_pos,
-            paper.rmse_pos,
-            ours.rmse_vel,
-            paper.rmse_vel,
-            ours.rmse_acc,
-            paper.rmse_acc,
-            ours.time_s,
-            paper.time_s
-        );
+        println!("  {}", ours.against(paper));
     }
     Ok(())
 }
