@@ -251,6 +251,41 @@ pub fn exact_log_likelihood_brute_force(
     Ok(-0.5 * (big as f64 * LN_2PI + log_det + quad))
 }
 
+/// Pearson's chi-square statistic of `observed` counts of the outcomes `0, 1, 2, …` against
+/// the probabilities `pmf(k)`, the outcomes pooled in order so that every bin expects at
+/// least 5 (the last bin also takes every outcome past the observed ones). Returns the
+/// statistic and its degrees of freedom (bins − 1).
+pub fn pearson_pooled(observed: &[usize], pmf: impl Fn(usize) -> f64) -> (f64, usize) {
+    let reps = observed.iter().sum::<usize>() as f64;
+    let (mut stat, mut bins) = (0.0, 0);
+    let (mut o, mut e, mut tail) = (0.0, 0.0, 1.0);
+    for (k, &ok) in observed.iter().enumerate() {
+        let p = pmf(k);
+        tail -= p;
+        o += ok as f64;
+        e += p * reps;
+        if e >= 5.0 && tail * reps >= 5.0 {
+            stat += (o - e).powi(2) / e;
+            bins += 1;
+            (o, e) = (0.0, 0.0);
+        }
+    }
+    let e = e + tail.max(0.0) * reps;
+    stat += (o - e).powi(2) / e;
+    (stat, bins)
+}
+
+/// The 0.999 quantile of chi-square with `df ≥ 1` degrees of freedom (Wilson–Hilferty,
+/// within 1 % for `df ≥ 2`; 10.83 exactly at `df = 1`).
+pub fn chi2_quantile_999(df: usize) -> f64 {
+    if df <= 1 {
+        return 10.83;
+    }
+    let k = df as f64;
+    let h = 2.0 / (9.0 * k);
+    k * (1.0 - h + 3.090_232 * h.sqrt()).powi(3)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

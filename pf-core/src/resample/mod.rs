@@ -21,6 +21,7 @@
 
 mod multinomial;
 mod offspring;
+mod poisson;
 mod residual;
 mod stratified;
 mod systematic;

@@ -2,6 +2,7 @@
 
 use super::Resample;
 use super::offspring::{Runs, walk};
+use super::poisson::{Thresholds, distinct_sorted};
 use crate::simd::LANES;
 use crate::simd::math::floor_index;
 use crate::simd::{LaneRng, Simd, dispatch};
@@ -47,35 +48,9 @@ impl Resample for Multinomial {
 /// Offsets read past a cell's start without checking its count.
 const PAD: usize = 4;
 
-/// Poisson(1) thresholds: with `v` a uniform 53-bit integer, `#{k : v ≥ T_k}` is a
-/// Poisson(1) count (`T_k = 2⁵³·P(N ≤ k)`, exact to 2⁻⁵³ per outcome; by `k = 19`,
-/// `P(N ≤ k)` has rounded to 1 and the count stops).
-const POISSON1: [u64; 20] = poisson1_thresholds();
-
 /// Thresholds compared in the vectorised pass; counts of `QUICK` or more (probability
-/// 6·10⁻⁴) are finished against the rest of [`POISSON1`].
+/// 6·10⁻⁴) are finished against the rest.
 const QUICK: usize = 6;
-
-const fn poisson1_thresholds() -> [u64; 20] {
-    const INV_E: f64 = 0.367_879_441_171_442_33;
-    const TWO53: f64 = 9_007_199_254_740_992.0;
-    let mut t = [0u64; 20];
-    let (mut term, mut sum) = (1.0f64, 0.0f64);
-    let mut k = 0;
-    while k < t.len() {
-        sum += term;
-        let cdf = sum * INV_E;
-        // Rounding may take the sum a hair past 1; 2⁵³ is above every 53-bit draw.
-        t[k] = if cdf < 1.0 {
-            (cdf * TWO53) as u64
-        } else {
-            1 << 53
-        };
-        k += 1;
-        term /= k as f64;
-    }
-    t
-}
 
 thread_local! {
     /// Scratch of [`multinomial_draws`], reused from call to call on each thread (no
@@ -108,6 +83,7 @@ impl Points {
     #[inline(always)]
     fn draw<R: Rng + ?Sized>(&mut self, m: usize, lanes: &mut LaneRng, rng: &mut R) {
         let Points { first, pos, fix } = self;
+        let poisson1 = Thresholds::new(1.0);
         first.resize(m + 2, 0);
         pos.resize(m + PAD, 0.0);
         // Poisson(1) counts, 64 cells per lane step, into first[..m].
@@ -116,42 +92,29 @@ impl Points {
             let bits = lanes.step();
             let mut tail = false;
             for (c, &b) in cells.iter_mut().zip(bits.iter()) {
-                let v = b >> 11;
-                let mut k = 0;
-                for &th in &POISSON1[..QUICK] {
-                    k += usize::from(v >= th);
-                }
+                let k = poisson1.count_quick::<QUICK>(b >> 11);
                 tail |= k == QUICK;
                 *c = k;
             }
             if tail {
                 for (c, &b) in cells.iter_mut().zip(bits.iter()) {
                     if *c == QUICK {
-                        let v = b >> 11;
-                        *c += POISSON1[QUICK..].iter().filter(|&&th| v >= th).count();
+                        *c = poisson1.count_from(b >> 11, QUICK);
                     }
                 }
             }
             t += cells.iter().sum::<usize>();
         }
-        // Conditioning on M points: a uniform subset of T − M points to remove (distinct
-        // draws; the procedure is invariant under relabelling, so every subset is equally
-        // likely), or M − T cells, with replacement, to add to.
-        fix.clear();
+        // Conditioning on M points: a uniform subset of T − M points to remove, or M − T
+        // cells, with replacement, to add to.
         if t > m {
-            let d = t - m;
-            while fix.len() < d {
-                for _ in fix.len()..d {
-                    fix.push(rng.random_range(0..t));
-                }
-                fix.sort_unstable();
-                fix.dedup();
-            }
+            distinct_sorted(t, t - m, rng, fix);
         } else {
+            fix.clear();
             fix.extend((t..m).map(|_| rng.random_range(0..m)));
             fix.sort_unstable();
+            fix.push(usize::MAX);
         }
-        fix.push(usize::MAX);
         // Counts into starts, removals and additions applied on the way.
         let (mut start, mut orig, mut p) = (0usize, 0usize, 0usize);
         for (f, c) in first[..m].iter_mut().enumerate() {
@@ -258,37 +221,7 @@ mod tests {
     use super::*;
     use crate::mc::stream_rng;
     use crate::resample::offspring::cumulative;
-
-    /// The 0.999 quantile of chi-square with `df` degrees of freedom (Wilson–Hilferty,
-    /// within 1 % for `df ≥ 2`).
-    fn chi2_999(df: usize) -> f64 {
-        let k = df as f64;
-        let h = 2.0 / (9.0 * k);
-        k * (1.0 - h + 3.090_232 * h.sqrt()).powi(3)
-    }
-
-    /// Pearson's statistic of `observed` counts against the probabilities `pmf(k)`, the
-    /// outcomes pooled so that every bin expects at least 5 (the last bin takes every
-    /// larger outcome); returns it with its degrees of freedom.
-    fn chi2(observed: &[usize], pmf: impl Fn(usize) -> f64) -> (f64, usize) {
-        let reps = observed.iter().sum::<usize>() as f64;
-        let (mut stat, mut bins) = (0.0, 0);
-        let (mut o, mut e, mut tail) = (0.0, 0.0, 1.0);
-        for (k, &ok) in observed.iter().enumerate() {
-            let p = pmf(k);
-            tail -= p;
-            o += ok as f64;
-            e += p * reps;
-            if e >= 5.0 && tail * reps >= 5.0 {
-                stat += (o - e).powi(2) / e;
-                bins += 1;
-                (o, e) = (0.0, 0.0);
-            }
-        }
-        let e = e + tail.max(0.0) * reps;
-        stat += (o - e).powi(2) / e;
-        (stat, bins)
-    }
+    use crate::testing::{chi2_quantile_999, pearson_pooled};
 
     fn weights(n: usize, skew: i32) -> Vec<f64> {
         let raw: Vec<f64> = (1..=n)
@@ -348,26 +281,6 @@ mod tests {
                 }
             }
         }
-    }
-
-    /// The thresholds are the Poisson(1) distribution function, and stop where it rounds
-    /// to 1.
-    #[test]
-    fn thresholds_are_the_poisson_cdf() {
-        let mut cdf = 0.0;
-        let mut fact = 1.0;
-        for (k, &t) in POISSON1.iter().enumerate() {
-            if k > 0 {
-                fact *= k as f64;
-            }
-            cdf += (-1.0f64).exp() / fact;
-            let want = cdf.min(1.0) * 2f64.powi(53);
-            assert!(
-                (t as f64 - want).abs() <= 8.0,
-                "k = {k}: {t} against {want}"
-            );
-        }
-        assert_eq!(POISSON1[19], 1 << 53);
     }
 
     /// Whatever the size of the Poisson process, exactly M points come out, each within
@@ -456,9 +369,9 @@ mod tests {
                 let ln_choose: f64 = (1..=k).map(|i| ((m - k + i) as f64 / i as f64).ln()).sum();
                 ln_choose + k as f64 * p.ln() + (m - k) as f64 * (1.0 - p).ln()
             };
-            let (stat, df) = chi2(h, |k| ln_pmf(k).exp());
+            let (stat, df) = pearson_pooled(h, |k| ln_pmf(k).exp());
             assert!(
-                stat < chi2_999(df.max(2)),
+                stat < chi2_quantile_999(df),
                 "particle {j}: χ² {stat} on {df} df"
             );
         }

@@ -1,16 +1,39 @@
-//! Residual resampling: deterministic copies, then multinomial on what is left.
+//! Residual resampling: deterministic copies, then multinomial on what is left, drawn per
+//! particle by thinning a Poisson process.
 
 use super::Resample;
-use super::multinomial::multinomial_draws;
 use super::offspring::{Runs, SCAN};
+use super::poisson::{Thresholds, distinct_sorted};
 use crate::simd::math::floor_index;
-use crate::simd::{Simd, dispatch};
-use rand::Rng;
+use crate::simd::{LANES, LaneRng, Simd, dispatch};
+use rand::{Rng, RngExt};
+use rand_distr::{Distribution, Poisson};
+use std::cell::RefCell;
 
-/// Residual resampling (Liu & Chen 1998): particle `j` first gets `⌊M·W_j⌋` copies; the
-/// remaining `R = M − Σ⌊M·W_j⌋` are drawn multinomially from the residual weights
-/// `(M·W_j − ⌊M·W_j⌋)/R`, with the O(N) multinomial of
-/// [`Multinomial`](super::Multinomial).
+/// Residual resampling (Liu & Chen 1998): particle `j` gets `⌊M·W_j⌋` copies plus its share
+/// of `R = M − Σ⌊M·W_j⌋` multinomial draws from the residual weights `r_j/R`, where
+/// `r_j = M·W_j − ⌊M·W_j⌋`.
+///
+/// Every `r_j` is below 1, so the `R` draws can be made per particle in O(N), with no
+/// points to place or search:
+///
+/// 1. **Poissonisation by thinning.** Particle `j` gets a Poisson(`Λ`) number of
+///    candidates, each kept with probability `r_j`: a Poisson(`Λ·r_j`) count, independent
+///    across particles. `Λ = 1 + 3/√R`, so that the total `T`, Poisson(`Λ·R`), falls short
+///    of `R` with probability about 10⁻³; then further rounds add counts (independent
+///    Poisson counts add up to Poisson counts).
+/// 2. **Conditioning on `R`.** Given `T`, the kept candidates are `T` independent draws from
+///    `r/R`; a uniformly chosen subset of `T − R` of them (about `3√R`, from the caller's
+///    generator) is removed, which leaves `R` independent draws.
+/// 3. **Ancestors.** Each particle's copies and kept draws are written as one run, so the
+///    ancestors come out in increasing order.
+///
+/// Each particle's candidate count (inversion against thresholds computed once per call,
+/// exact to 2⁻⁵³ per outcome) and one uniform that inverts the Binomial number kept among
+/// up to three candidates come from a [`LaneRng`] seeded from the caller's generator, one
+/// lane step each per 64 particles; a particle with four candidates or more (2 %) thins
+/// them one by one on the caller's generator. The joint law of the offspring counts is
+/// tested by chi-square, and so are the thinned counts of each path.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Residual;
 
@@ -20,82 +43,398 @@ impl Resample for Residual {
     }
 }
 
-fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut [usize]) {
-    let m = ancestors.len();
-    let mf = m as f64;
-    // Deterministic copies: the floors computed SCAN at a time (vectorised), the copies
-    // written as runs.
-    let k = dispatch(
-        simd,
-        #[inline(always)]
-        || {
-            let mut runs = Runs::new();
-            let mut kb = [0usize; SCAN];
-            let mut k = 0usize;
-            for (j0, block) in w.chunks(SCAN).enumerate() {
-                for (c, &wj) in kb.iter_mut().zip(block) {
-                    *c = floor_index(mf * wj).0;
-                }
-                for (q, &c) in kb[..block.len()].iter().enumerate() {
-                    k = (k + c).min(m);
-                    runs.push(ancestors, j0 * SCAN + q, k);
+/// Candidate counts compared in the vectorised pass, where up to `QUICK − 1` candidates are
+/// thinned at once; `QUICK` means "`QUICK` or more", finished one by one.
+const QUICK: usize = 4;
+
+/// Standard deviations of `T` by which the first round overshoots `R`.
+const OVERSHOOT: f64 = 3.0;
+
+/// Largest candidate rate of a round (the thresholds are built for rates up to 4).
+const MAX_RATE: f64 = 4.0;
+
+thread_local! {
+    /// Scratch of [`residual`], reused from call to call on each thread (no allocation once
+    /// grown; every call overwrites what it reads).
+    static SCRATCH: RefCell<(Vec<usize>, Vec<usize>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+}
+
+/// A 52-bit uniform on [0, 1) from raw bits (the exponent trick, which vectorises).
+#[inline(always)]
+fn unit(b: u64) -> f64 {
+    f64::from_bits((b >> 12) | 0x3ff0_0000_0000_0000) - 1.0
+}
+
+/// `counts[j] ←` (with `add`, `+=`) the number of kept candidates of particle `j`: a
+/// Poisson(`rate`) number of candidates (`th` its thresholds), each kept with probability
+/// `keep(j) ∈ [0, 1]`. Returns the sum of the new counts.
+#[inline(always)]
+fn thin<R: Rng + ?Sized>(
+    counts: &mut [usize],
+    th: &Thresholds,
+    add: bool,
+    keep: &impl Fn(usize) -> f64,
+    lanes: &mut LaneRng,
+    rng: &mut R,
+) -> usize {
+    let mut total = 0;
+    for (b, block) in counts.chunks_mut(LANES).enumerate() {
+        let j0 = b * LANES;
+        let mut p = [0.0f64; LANES];
+        for (q, p) in p[..block.len()].iter_mut().enumerate() {
+            *p = keep(j0 + q);
+        }
+        let (v, u) = (lanes.step(), lanes.step());
+        let mut k = [0usize; LANES];
+        let mut c = [0usize; LANES];
+        for q in 0..LANES {
+            let cq = th.count_quick::<QUICK>(v[q] >> 11);
+            // Binomial(cq, p) kept candidates by inversion of one uniform, for cq ≤ 3: the
+            // distribution function at 0, 1 and 2 (2 where it is 1 already, above every
+            // uniform).
+            let (pq, qq) = (p[q], 1.0 - p[q]);
+            let q2 = qq * qq;
+            let q3 = q2 * qq;
+            let f0 = match cq {
+                1 => qq,
+                2 => q2,
+                3 => q3,
+                _ => 2.0,
+            };
+            let f1 = match cq {
+                2 => 1.0 - pq * pq,
+                3 => q3 + 3.0 * pq * q2,
+                _ => 2.0,
+            };
+            let f2 = if cq == 3 { 1.0 - pq * pq * pq } else { 2.0 };
+            let uq = unit(u[q]);
+            k[q] = usize::from(uq >= f0) + usize::from(uq >= f1) + usize::from(uq >= f2);
+            c[q] = cq;
+        }
+        // Particles with QUICK candidates or more: a bit mask, so that the scalar work is
+        // per such particle.
+        let mut rest = 0u64;
+        for (q, &cq) in c.iter().enumerate() {
+            rest |= u64::from(cq == QUICK) << q;
+        }
+        rest &= u64::MAX >> (LANES - block.len());
+        while rest != 0 {
+            let q = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            let cq = th.count_from(v[q] >> 11, QUICK);
+            k[q] = (0..cq).filter(|_| rng.random::<f64>() < p[q]).count();
+        }
+        for (n, &kq) in block.iter_mut().zip(&k) {
+            *n = if add { *n + kq } else { kq };
+            total += kq;
+        }
+    }
+    total
+}
+
+/// Particle `j`'s `base(j)` copies and kept draws (its count less the draws `removed`, an
+/// ascending list of indices among all the counted draws in particle order, then
+/// `usize::MAX`) as one run of copies of `j` in `out`. Boundaries are computed a block at a
+/// time: only a block that holds a removal (one in about every `√M/3` particles) walks its
+/// draws one by one.
+#[inline(always)]
+fn write_runs(
+    counts: &[usize],
+    removed: &[usize],
+    base: &impl Fn(usize) -> usize,
+    out: &mut [usize],
+) {
+    let mut runs = Runs::new();
+    let (mut drawn, mut kept, mut x) = (0usize, 0usize, 0usize);
+    let mut kb = [0usize; SCAN];
+    for (b, block) in counts.chunks(SCAN).enumerate() {
+        let j0 = b * SCAN;
+        let kb = &mut kb[..block.len()];
+        for (q, (k, &c)) in kb.iter_mut().zip(block).enumerate() {
+            *k = base(j0 + q) + c;
+        }
+        let end = drawn + block.iter().sum::<usize>();
+        if removed[x] < end {
+            for (k, &c) in kb.iter_mut().zip(block) {
+                drawn += c;
+                while removed[x] < drawn {
+                    *k -= 1;
+                    x += 1;
                 }
             }
-            k
-        },
-    );
-    let r = m - k;
-    if r == 0 {
+        }
+        drawn = end;
+        for k in kb.iter_mut() {
+            kept += *k;
+            *k = kept;
+        }
+        for (q, &k) in kb.iter().enumerate() {
+            if runs.push(out, j0 + q, k) {
+                return;
+            }
+        }
+    }
+}
+
+/// `Σ⌊M·W_j⌋` and `Σ r_j`, four partial sums at a time (a vectorisable loop).
+#[inline(always)]
+fn floors_and_mass(w: &[f64], mf: f64) -> (usize, f64) {
+    let (mut f4, mut s4) = ([0usize; 4], [0.0f64; 4]);
+    let mut chunks = w.chunks_exact(4);
+    for c in &mut chunks {
+        for l in 0..4 {
+            let (f, ff) = floor_index(mf * c[l]);
+            f4[l] += f;
+            s4[l] += mf * c[l] - ff;
+        }
+    }
+    for &wj in chunks.remainder() {
+        let (f, ff) = floor_index(mf * wj);
+        f4[0] += f;
+        s4[0] += mf * wj - ff;
+    }
+    (f4.iter().sum(), (s4[0] + s4[1]) + (s4[2] + s4[3]))
+}
+
+fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut [usize]) {
+    let (n, m) = (w.len(), ancestors.len());
+    if n == 0 || m == 0 {
         return;
     }
-    // A multiplication, not a division, per residual weight.
-    let inv_r = 1.0 / r as f64;
-    let residual = |j: usize| {
+    let mf = m as f64;
+    let (floors, mass) = dispatch(
+        simd,
+        #[inline(always)]
+        || floors_and_mass(w, mf),
+    );
+    let r = m.saturating_sub(floors);
+    // The draws are from `r_j/R`. Weights summing short of 1 leave `Σ r_j < R`; the missing
+    // mass goes to the last particle (where the cumulative-weight schemes put it), as an
+    // extra rate `e`. Weights summing past 1 give the draws of `r_j/Σ r_j`.
+    let rf = r as f64;
+    let scale = if mass > rf { rf / mass } else { 1.0 };
+    let e = (rf - mass * scale).max(0.0);
+    let floor = |j: usize| floor_index(mf * w[j]).0;
+    let keep = |j: usize| {
         let x = mf * w[j];
-        (x - floor_index(x).1) * inv_r
+        (x - floor_index(x).1) * scale
     };
-    multinomial_draws(simd, w.len(), residual, rng, &mut ancestors[k..]);
+    let mut lanes = (r > 0).then(|| LaneRng::from_rng(rng));
+    SCRATCH.with(|cell| {
+        let (counts, removed) = &mut *cell.borrow_mut();
+        // No clearing: the first round overwrites every count.
+        counts.resize(n, 0);
+        dispatch(
+            simd,
+            #[inline(always)]
+            || {
+                let mut t = 0;
+                match lanes.as_mut() {
+                    None => counts.fill(0),
+                    Some(_) if !mass.is_finite() => {
+                        counts.fill(0);
+                        counts[n - 1] = r;
+                        t = r;
+                    }
+                    Some(lanes) => {
+                        // Each round's counts have mean `rate·R` in all.
+                        let mut rate = 1.0 + OVERSHOOT / rf.sqrt();
+                        let mut add = false;
+                        while t < r {
+                            t += thin(counts, &Thresholds::new(rate), add, &keep, lanes, rng);
+                            if let Ok(extra) = Poisson::new(rate * e) {
+                                let extra = extra.sample(rng) as usize;
+                                counts[n - 1] += extra;
+                                t += extra;
+                            }
+                            let d = r.saturating_sub(t) as f64;
+                            rate = ((d + OVERSHOOT * d.sqrt() + 1.0) / rf).min(MAX_RATE);
+                            add = true;
+                        }
+                    }
+                }
+                distinct_sorted(t.max(1), t - r, rng, removed);
+                write_runs(counts, removed, &floor, ancestors);
+            },
+        );
+    });
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::mc::stream_rng;
+    use crate::resample::offspring_counts;
+    use crate::testing::{chi2_quantile_999, pearson_pooled};
 
-    /// The fast residual scheme equals its definition: the floors in order, then the
-    /// multinomial of the residual weights on the same generator; on both kernels.
+    /// Thinning a Poisson(Λ) number of candidates with probability `p` gives Poisson(Λ·p)
+    /// counts, on the vectorised binomial path (Λ = 1.5: most particles have at most three
+    /// candidates) and on the scalar one (Λ = 3.9: a third have four or more).
     #[test]
-    fn residual_is_floors_then_multinomial() {
+    fn thinned_counts_are_poisson() {
+        let n = 40_000;
+        for (i, (rate, p)) in [(1.5, 0.8), (1.5, 0.3), (1.0, 0.05), (3.9, 0.9), (3.9, 0.5)]
+            .into_iter()
+            .enumerate()
+        {
+            let mut rng = stream_rng(15, i as u64);
+            let mut lanes = LaneRng::from_rng(&mut rng);
+            let mut counts = vec![0usize; n];
+            let th = Thresholds::new(rate);
+            dispatch(Simd::Auto, || {
+                thin(&mut counts, &th, false, &|_| p, &mut lanes, &mut rng)
+            });
+            let mut hist = vec![0usize; 40];
+            for &c in &counts {
+                hist[c] += 1;
+            }
+            let lambda: f64 = rate * p;
+            let pmf = |k: usize| {
+                let ln_fact: f64 = (1..=k).map(|i| (i as f64).ln()).sum();
+                (k as f64 * lambda.ln() - lambda - ln_fact).exp()
+            };
+            let (chi2, df) = pearson_pooled(&hist, pmf);
+            assert!(
+                chi2 < chi2_quantile_999(df),
+                "Λ = {rate}, p = {p}: χ² {chi2} on {df} df"
+            );
+        }
+    }
+
+    /// Floors first: every particle gets at least `⌊M·W_j⌋`, exactly `M` ancestors come
+    /// out, in increasing order, on both kernels alike.
+    #[test]
+    fn floors_total_and_order_on_both_kernels() {
         let w: Vec<f64> = {
             let raw: Vec<f64> = (1..=150).map(|i| ((i * 7) % 19) as f64 + 0.1).collect();
             let s: f64 = raw.iter().sum();
             raw.iter().map(|x| x / s).collect()
         };
-        for &m in &[1usize, 10, 150, 1000] {
-            let mut want = Vec::new();
-            for (j, &wj) in w.iter().enumerate() {
-                let c = (m as f64 * wj).floor() as usize;
-                want.extend(std::iter::repeat_n(j, c));
+        for &m in &[1usize, 10, 150, 1000, 5000] {
+            let mut auto = vec![0; m];
+            residual(Simd::Auto, &w, &mut stream_rng(1, m as u64), &mut auto);
+            assert!(auto.windows(2).all(|p| p[0] <= p[1]), "M = {m}");
+            for (j, c) in offspring_counts(&auto, w.len()).into_iter().enumerate() {
+                assert!(
+                    c >= (m as f64 * w[j]).floor() as usize,
+                    "M = {m}, particle {j}"
+                );
             }
-            let k = want.len();
-            let mut tail = vec![0; m - k];
-            let inv_r = 1.0 / (m - k) as f64;
-            multinomial_draws(
+            let mut portable = vec![0; m];
+            residual(
                 Simd::Portable,
-                w.len(),
-                |j| {
-                    let x = m as f64 * w[j];
-                    (x - x.floor()) * inv_r
-                },
+                &w,
                 &mut stream_rng(1, m as u64),
-                &mut tail,
+                &mut portable,
             );
-            want.extend(tail);
-            for simd in [Simd::Auto, Simd::Portable] {
-                let mut fast = vec![0; m];
-                residual(simd, &w, &mut stream_rng(1, m as u64), &mut fast);
-                assert_eq!(fast, want, "M = {m}, {simd:?}");
+            assert_eq!(auto, portable, "M = {m}");
+        }
+    }
+
+    /// Weights that are exact multiples of `1/M` leave no residual: the floors alone.
+    #[test]
+    fn exact_weights_are_copied_deterministically() {
+        let w = [0.25, 0.5, 0.0, 0.25];
+        let mut a = vec![9; 8];
+        residual(Simd::Auto, &w, &mut stream_rng(2, 0), &mut a);
+        assert_eq!(a, [0, 0, 1, 1, 1, 1, 3, 3]);
+    }
+
+    /// No residual mass but draws left (weights summing short of 1 in multiples of 1/M):
+    /// the draws go to the last particle, and nothing hangs.
+    #[test]
+    fn draws_without_residual_mass_go_to_the_last_particle() {
+        let w = [0.25, 0.25];
+        let mut a = vec![9; 4];
+        residual(Simd::Auto, &w, &mut stream_rng(3, 0), &mut a);
+        assert_eq!(a, [0, 1, 1, 1]);
+    }
+
+    /// Weights far from summing to 1, or with a NaN, neither hang nor leave the range: the
+    /// missing mass goes to the last particle, and a weight total above 1 is normalised.
+    #[test]
+    fn weights_far_from_normalised_stay_in_range() {
+        let mut a = vec![0usize; 1000];
+        let tiny = vec![1e-6; 10];
+        residual(Simd::Auto, &tiny, &mut stream_rng(4, 0), &mut a);
+        assert!(a.iter().all(|&i| i < 10));
+        // Σ r_j = 0.01 of R = 1000 draws: nearly all go to the last particle.
+        assert!(offspring_counts(&a, 10)[9] > 950);
+        // Σ W = 1.0009 and M = 995: floors of 99, R = 5 and Σ r_j = 5.9: normalised.
+        let big = vec![0.10009; 10];
+        let mut b = vec![0usize; 995];
+        residual(Simd::Auto, &big, &mut stream_rng(4, 1), &mut b);
+        assert!(
+            offspring_counts(&b, 10)
+                .iter()
+                .all(|&c| (99..=104).contains(&c))
+        );
+        let nan = [0.5, f64::NAN, 0.5];
+        residual(Simd::Auto, &nan, &mut stream_rng(4, 2), &mut a);
+        assert!(a.iter().all(|&i| i < 3));
+    }
+
+    /// The joint law: W = (0.45, 0.35, 0.2) and M = 4 give floors (1, 1, 0) and R = 2 draws
+    /// from the residuals (0.4, 0.2, 0.4). Chi-square of the 6 outcomes over 60 000 seeded
+    /// calls (Λ = 3.1 here, so most particles take the scalar path and every call removes
+    /// draws); with 5 degrees of freedom, P(χ² > 20.5) = 0.001.
+    #[test]
+    fn residual_draws_are_jointly_multinomial() {
+        let w = [0.45, 0.35, 0.2];
+        let p = [0.4f64, 0.2, 0.4];
+        let reps = 60_000;
+        let mut seen = std::collections::HashMap::new();
+        let mut rng = stream_rng(13, 0);
+        let mut a = [0usize; 4];
+        for _ in 0..reps {
+            residual(Simd::Auto, &w, &mut rng, &mut a);
+            let k = offspring_counts(&a, 3);
+            *seen.entry([k[0] - 1, k[1] - 1, k[2]]).or_insert(0usize) += 1;
+        }
+        assert_eq!(seen.values().sum::<usize>(), reps);
+        let mut chi2 = 0.0;
+        for i in 0..=2usize {
+            for j in 0..=2 - i {
+                let l = 2 - i - j;
+                let fact = |n: usize| (1..=n).product::<usize>() as f64;
+                let prob = 2.0 / (fact(i) * fact(j) * fact(l))
+                    * p[0].powi(i as i32)
+                    * p[1].powi(j as i32)
+                    * p[2].powi(l as i32);
+                let e = prob * reps as f64;
+                let o = seen.get(&[i, j, l]).copied().unwrap_or(0) as f64;
+                chi2 += (o - e).powi(2) / e;
             }
         }
+        assert!(chi2 < 20.5, "χ² {chi2}");
+    }
+
+    /// 64 particles with residuals spread over [0, 1) (one vectorised block): particle 0's
+    /// draws beyond its floor are Binomial(R, r_0/R). Chi-square over 20 000 calls.
+    #[test]
+    fn a_particles_draws_are_binomial() {
+        let raw: Vec<f64> = (0..64)
+            .map(|i| 1.0 + ((i * 37) % 10) as f64 / 9.0)
+            .collect();
+        let s: f64 = raw.iter().sum();
+        let w: Vec<f64> = raw.iter().map(|x| x / s).collect();
+        let m = 100usize;
+        let floors: Vec<usize> = w.iter().map(|&x| (m as f64 * x).floor() as usize).collect();
+        let r = m - floors.iter().sum::<usize>();
+        let p0 = (m as f64 * w[0] - floors[0] as f64) / r as f64;
+        let mut hist = vec![0usize; r + 1];
+        let mut rng = stream_rng(14, 0);
+        let mut a = vec![0usize; m];
+        for _ in 0..20_000 {
+            residual(Simd::Auto, &w, &mut rng, &mut a);
+            hist[offspring_counts(&a, 64)[0] - floors[0]] += 1;
+        }
+        let pmf = |k: usize| {
+            let ln_choose: f64 = (1..=k).map(|i| ((r - k + i) as f64 / i as f64).ln()).sum();
+            (ln_choose + k as f64 * p0.ln() + (r - k) as f64 * (1.0 - p0).ln()).exp()
+        };
+        let (chi2, df) = pearson_pooled(&hist, pmf);
+        assert!(df >= 2, "{df} df");
+        assert!(chi2 < chi2_quantile_999(df), "χ² {chi2} on {df} df");
     }
 }
