@@ -2,11 +2,10 @@
 //! particle by thinning a Poisson process.
 
 use super::Resample;
-use super::offspring::{Runs, SCAN};
-use super::poisson::{Thresholds, distinct_sorted};
+use super::poisson::{Thresholds, distinct_sorted, thin, write_runs};
 use crate::simd::math::floor_index;
-use crate::simd::{LANES, LaneRng, Simd, dispatch};
-use rand::{Rng, RngExt};
+use crate::simd::{LaneRng, Simd, dispatch};
+use rand::Rng;
 use rand_distr::{Distribution, Poisson};
 use std::cell::RefCell;
 
@@ -43,10 +42,6 @@ impl Resample for Residual {
     }
 }
 
-/// Candidate counts compared in the vectorised pass, where up to `QUICK − 1` candidates are
-/// thinned at once; `QUICK` means "`QUICK` or more", finished one by one.
-const QUICK: usize = 4;
-
 /// Standard deviations of `T` by which the first round overshoots `R`.
 const OVERSHOOT: f64 = 3.0;
 
@@ -57,123 +52,6 @@ thread_local! {
     /// Scratch of [`residual`], reused from call to call on each thread (no allocation once
     /// grown; every call overwrites what it reads).
     static SCRATCH: RefCell<(Vec<usize>, Vec<usize>)> = const { RefCell::new((Vec::new(), Vec::new())) };
-}
-
-/// A 52-bit uniform on [0, 1) from raw bits (the exponent trick, which vectorises).
-#[inline(always)]
-fn unit(b: u64) -> f64 {
-    f64::from_bits((b >> 12) | 0x3ff0_0000_0000_0000) - 1.0
-}
-
-/// `counts[j] ←` (with `add`, `+=`) the number of kept candidates of particle `j`: a
-/// Poisson(`rate`) number of candidates (`th` its thresholds), each kept with probability
-/// `keep(j) ∈ [0, 1]`. Returns the sum of the new counts.
-#[inline(always)]
-fn thin<R: Rng + ?Sized>(
-    counts: &mut [usize],
-    th: &Thresholds,
-    add: bool,
-    keep: &impl Fn(usize) -> f64,
-    lanes: &mut LaneRng,
-    rng: &mut R,
-) -> usize {
-    let mut total = 0;
-    for (b, block) in counts.chunks_mut(LANES).enumerate() {
-        let j0 = b * LANES;
-        let mut p = [0.0f64; LANES];
-        for (q, p) in p[..block.len()].iter_mut().enumerate() {
-            *p = keep(j0 + q);
-        }
-        let (v, u) = (lanes.step(), lanes.step());
-        let mut k = [0usize; LANES];
-        let mut c = [0usize; LANES];
-        for q in 0..LANES {
-            let cq = th.count_quick::<QUICK>(v[q] >> 11);
-            // Binomial(cq, p) kept candidates by inversion of one uniform, for cq ≤ 3: the
-            // distribution function at 0, 1 and 2 (2 where it is 1 already, above every
-            // uniform).
-            let (pq, qq) = (p[q], 1.0 - p[q]);
-            let q2 = qq * qq;
-            let q3 = q2 * qq;
-            let f0 = match cq {
-                1 => qq,
-                2 => q2,
-                3 => q3,
-                _ => 2.0,
-            };
-            let f1 = match cq {
-                2 => 1.0 - pq * pq,
-                3 => q3 + 3.0 * pq * q2,
-                _ => 2.0,
-            };
-            let f2 = if cq == 3 { 1.0 - pq * pq * pq } else { 2.0 };
-            let uq = unit(u[q]);
-            k[q] = usize::from(uq >= f0) + usize::from(uq >= f1) + usize::from(uq >= f2);
-            c[q] = cq;
-        }
-        // Particles with QUICK candidates or more: a bit mask, so that the scalar work is
-        // per such particle.
-        let mut rest = 0u64;
-        for (q, &cq) in c.iter().enumerate() {
-            rest |= u64::from(cq == QUICK) << q;
-        }
-        rest &= u64::MAX >> (LANES - block.len());
-        while rest != 0 {
-            let q = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            let cq = th.count_from(v[q] >> 11, QUICK);
-            k[q] = (0..cq).filter(|_| rng.random::<f64>() < p[q]).count();
-        }
-        for (n, &kq) in block.iter_mut().zip(&k) {
-            *n = if add { *n + kq } else { kq };
-            total += kq;
-        }
-    }
-    total
-}
-
-/// Particle `j`'s `base(j)` copies and kept draws (its count less the draws `removed`, an
-/// ascending list of indices among all the counted draws in particle order, then
-/// `usize::MAX`) as one run of copies of `j` in `out`. Boundaries are computed a block at a
-/// time: only a block that holds a removal (one in about every `√M/3` particles) walks its
-/// draws one by one.
-#[inline(always)]
-fn write_runs(
-    counts: &[usize],
-    removed: &[usize],
-    base: &impl Fn(usize) -> usize,
-    out: &mut [usize],
-) {
-    let mut runs = Runs::new();
-    let (mut drawn, mut kept, mut x) = (0usize, 0usize, 0usize);
-    let mut kb = [0usize; SCAN];
-    for (b, block) in counts.chunks(SCAN).enumerate() {
-        let j0 = b * SCAN;
-        let kb = &mut kb[..block.len()];
-        for (q, (k, &c)) in kb.iter_mut().zip(block).enumerate() {
-            *k = base(j0 + q) + c;
-        }
-        let end = drawn + block.iter().sum::<usize>();
-        if removed[x] < end {
-            for (k, &c) in kb.iter_mut().zip(block) {
-                drawn += c;
-                while removed[x] < drawn {
-                    *k -= 1;
-                    x += 1;
-                }
-            }
-        }
-        drawn = end;
-        for k in kb.iter_mut() {
-            kept += *k;
-            *k = kept;
-        }
-        for (q, &k) in kb.iter().enumerate() {
-            if runs.push(out, j0 + q, k) {
-                return;
-            }
-        }
-    }
 }
 
 /// `Σ⌊M·W_j⌋` and `Σ r_j`, four partial sums at a time (a vectorisable loop).
@@ -266,40 +144,6 @@ mod tests {
     use crate::mc::stream_rng;
     use crate::resample::offspring_counts;
     use crate::testing::{chi2_quantile_999, pearson_pooled};
-
-    /// Thinning a Poisson(Λ) number of candidates with probability `p` gives Poisson(Λ·p)
-    /// counts, on the vectorised binomial path (Λ = 1.5: most particles have at most three
-    /// candidates) and on the scalar one (Λ = 3.9: a third have four or more).
-    #[test]
-    fn thinned_counts_are_poisson() {
-        let n = 40_000;
-        for (i, (rate, p)) in [(1.5, 0.8), (1.5, 0.3), (1.0, 0.05), (3.9, 0.9), (3.9, 0.5)]
-            .into_iter()
-            .enumerate()
-        {
-            let mut rng = stream_rng(15, i as u64);
-            let mut lanes = LaneRng::from_rng(&mut rng);
-            let mut counts = vec![0usize; n];
-            let th = Thresholds::new(rate);
-            dispatch(Simd::Auto, || {
-                thin(&mut counts, &th, false, &|_| p, &mut lanes, &mut rng)
-            });
-            let mut hist = vec![0usize; 40];
-            for &c in &counts {
-                hist[c] += 1;
-            }
-            let lambda: f64 = rate * p;
-            let pmf = |k: usize| {
-                let ln_fact: f64 = (1..=k).map(|i| (i as f64).ln()).sum();
-                (k as f64 * lambda.ln() - lambda - ln_fact).exp()
-            };
-            let (chi2, df) = pearson_pooled(&hist, pmf);
-            assert!(
-                chi2 < chi2_quantile_999(df),
-                "Λ = {rate}, p = {p}: χ² {chi2} on {df} df"
-            );
-        }
-    }
 
     /// Floors first: every particle gets at least `⌊M·W_j⌋`, exactly `M` ancestors come
     /// out, in increasing order, on both kernels alike.
