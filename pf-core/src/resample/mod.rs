@@ -226,6 +226,29 @@ mod tests {
         }
     }
 
+    /// Weights outside the contract (NaN, infinite, negative, all zero) give ancestors in
+    /// range from every scheme, with no panic (the filters reject such weights before they
+    /// get here; a direct caller gets indices, not a crash).
+    #[test]
+    fn bad_weights_never_panic_and_stay_in_range() {
+        let cases: [&[f64]; 4] = [
+            &[0.2, f64::NAN, 0.3, f64::NAN, 0.5],
+            &[0.2, f64::INFINITY, 0.3],
+            &[0.6, -0.5, 0.9, -1e300],
+            &[0.0, 0.0, 0.0],
+        ];
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(8);
+        for w in cases {
+            for m in [1usize, 7, 100] {
+                let mut a = vec![0; m];
+                for scheme in Resampler::ALL {
+                    scheme.resample(w, &mut rng, &mut a);
+                    assert!(a.iter().all(|&i| i < w.len()), "{scheme} {w:?}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn a_point_mass_is_copied_everywhere() {
         let w = [0.0, 0.0, 1.0, 0.0];

@@ -54,21 +54,23 @@ thread_local! {
     static SCRATCH: RefCell<(Vec<usize>, Vec<usize>)> = const { RefCell::new((Vec::new(), Vec::new())) };
 }
 
-/// `Σ⌊M·W_j⌋` and `Σ r_j`, four partial sums at a time (a vectorisable loop).
+/// `Σ⌊M·W_j⌋` and `Σ r_j`, four partial sums at a time (a vectorisable loop). Each floor
+/// is capped at `M`, which is all a NaN, infinite or negative weight can do to the sums.
 #[inline(always)]
-fn floors_and_mass(w: &[f64], mf: f64) -> (usize, f64) {
+fn floors_and_mass(w: &[f64], m: usize) -> (usize, f64) {
+    let mf = m as f64;
     let (mut f4, mut s4) = ([0usize; 4], [0.0f64; 4]);
     let mut chunks = w.chunks_exact(4);
     for c in &mut chunks {
         for l in 0..4 {
             let (f, ff) = floor_index(mf * c[l]);
-            f4[l] += f;
+            f4[l] += f.min(m);
             s4[l] += mf * c[l] - ff;
         }
     }
     for &wj in chunks.remainder() {
         let (f, ff) = floor_index(mf * wj);
-        f4[0] += f;
+        f4[0] += f.min(m);
         s4[0] += mf * wj - ff;
     }
     (f4.iter().sum(), (s4[0] + s4[1]) + (s4[2] + s4[3]))
@@ -83,7 +85,7 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
     let (floors, mass) = dispatch(
         simd,
         #[inline(always)]
-        || floors_and_mass(w, mf),
+        || floors_and_mass(w, m),
     );
     let r = m.saturating_sub(floors);
     // The draws are from `r_j/R`. Weights summing short of 1 leave `Σ r_j < R`; the missing
@@ -92,7 +94,7 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
     let rf = r as f64;
     let scale = if mass > rf { rf / mass } else { 1.0 };
     let e = (rf - mass * scale).max(0.0);
-    let floor = |j: usize| floor_index(mf * w[j]).0;
+    let floor = |j: usize| floor_index(mf * w[j]).0.min(m);
     let keep = |j: usize| {
         let x = mf * w[j];
         (x - floor_index(x).1) * scale
@@ -213,9 +215,9 @@ mod tests {
                 .iter()
                 .all(|&c| (99..=104).contains(&c))
         );
-        let nan = [0.5, f64::NAN, 0.5];
-        residual(Simd::Auto, &nan, &mut stream_rng(4, 2), &mut a);
-        assert!(a.iter().all(|&i| i < 3));
+        let bad = [0.5, f64::NAN, f64::NAN, f64::INFINITY, -0.5, f64::NAN, 0.5];
+        residual(Simd::Auto, &bad, &mut stream_rng(4, 2), &mut a);
+        assert!(a.iter().all(|&i| i < bad.len()));
     }
 
     /// The joint law: W = (0.45, 0.35, 0.2) and M = 4 give floors (1, 1, 0) and R = 2 draws
