@@ -54,26 +54,28 @@ thread_local! {
     static SCRATCH: RefCell<(Vec<usize>, Vec<usize>)> = const { RefCell::new((Vec::new(), Vec::new())) };
 }
 
-/// `Σ⌊M·W_j⌋` and `Σ r_j`, four partial sums at a time (a vectorisable loop). Each floor
-/// is capped at `M`, which is all a NaN, infinite or negative weight can do to the sums.
+/// `Σ⌊M·W_j⌋`, `Σ r_j`, and whether every weight lies in [0, 1] (no NaN), four partial
+/// sums at a time (a vectorisable loop).
 #[inline(always)]
-fn floors_and_mass(w: &[f64], m: usize) -> (usize, f64) {
-    let mf = m as f64;
-    let (mut f4, mut s4) = ([0usize; 4], [0.0f64; 4]);
+fn floors_and_mass(w: &[f64], mf: f64) -> (usize, f64, bool) {
+    let (mut f4, mut s4, mut ok) = ([0usize; 4], [0.0f64; 4], true);
     let mut chunks = w.chunks_exact(4);
     for c in &mut chunks {
         for l in 0..4 {
+            ok &= (0.0..=1.0).contains(&c[l]);
             let (f, ff) = floor_index(mf * c[l]);
-            f4[l] += f.min(m);
+            f4[l] = f4[l].wrapping_add(f);
             s4[l] += mf * c[l] - ff;
         }
     }
     for &wj in chunks.remainder() {
+        ok &= (0.0..=1.0).contains(&wj);
         let (f, ff) = floor_index(mf * wj);
-        f4[0] += f.min(m);
+        f4[0] = f4[0].wrapping_add(f);
         s4[0] += mf * wj - ff;
     }
-    (f4.iter().sum(), (s4[0] + s4[1]) + (s4[2] + s4[3]))
+    let floors = f4.iter().fold(0usize, |a, &f| a.wrapping_add(f));
+    (floors, (s4[0] + s4[1]) + (s4[2] + s4[3]), ok)
 }
 
 fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut [usize]) {
@@ -82,11 +84,21 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
         return;
     }
     let mf = m as f64;
-    let (floors, mass) = dispatch(
+    let (floors, mass, ok) = dispatch(
         simd,
         #[inline(always)]
-        || floors_and_mass(w, m),
+        || floors_and_mass(w, mf),
     );
+    if !ok {
+        // Outside the contract (a NaN, negative or above-1 weight, where the floors would
+        // mean nothing): such weights count as 0, or 1 above it, on a cleaned copy (an
+        // allocation on this path only).
+        let clean: Vec<f64> = w
+            .iter()
+            .map(|&x| if x >= 0.0 { x.min(1.0) } else { 0.0 })
+            .collect();
+        return residual(simd, &clean, rng, ancestors);
+    }
     let r = m.saturating_sub(floors);
     // The draws are from `r_j/R`. Weights summing short of 1 leave `Σ r_j < R`; the missing
     // mass goes to the last particle (where the cumulative-weight schemes put it), as an
@@ -94,7 +106,7 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
     let rf = r as f64;
     let scale = if mass > rf { rf / mass } else { 1.0 };
     let e = (rf - mass * scale).max(0.0);
-    let floor = |j: usize| floor_index(mf * w[j]).0.min(m);
+    let floor = |j: usize| floor_index(mf * w[j]).0;
     let keep = |j: usize| {
         let x = mf * w[j];
         (x - floor_index(x).1) * scale
@@ -111,11 +123,6 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
                 let mut t = 0;
                 match lanes.as_mut() {
                     None => counts.fill(0),
-                    Some(_) if !mass.is_finite() => {
-                        counts.fill(0);
-                        counts[n - 1] = r;
-                        t = r;
-                    }
                     Some(lanes) => {
                         // Each round's counts have mean `rate·R` in all.
                         let mut rate = 1.0 + OVERSHOOT / rf.sqrt();
@@ -196,8 +203,9 @@ mod tests {
         assert_eq!(a, [0, 1, 1, 1]);
     }
 
-    /// Weights far from summing to 1, or with a NaN, neither hang nor leave the range: the
-    /// missing mass goes to the last particle, and a weight total above 1 is normalised.
+    /// Weights far from summing to 1, or outside [0, 1], neither hang nor leave the range:
+    /// missing mass goes to the last particle, a weight total above 1 is normalised, and a
+    /// NaN or negative weight counts as 0.
     #[test]
     fn weights_far_from_normalised_stay_in_range() {
         let mut a = vec![0usize; 1000];
@@ -215,9 +223,10 @@ mod tests {
                 .iter()
                 .all(|&c| (99..=104).contains(&c))
         );
-        let bad = [0.5, f64::NAN, f64::NAN, f64::INFINITY, -0.5, f64::NAN, 0.5];
+        let bad = [0.5, f64::NAN, f64::NAN, -1e-18, -0.5, f64::NAN, 0.5];
         residual(Simd::Auto, &bad, &mut stream_rng(4, 2), &mut a);
-        assert!(a.iter().all(|&i| i < bad.len()));
+        let counts = offspring_counts(&a, bad.len());
+        assert_eq!(counts, [500, 0, 0, 0, 0, 0, 500]);
     }
 
     /// The joint law: W = (0.45, 0.35, 0.2) and M = 4 give floors (1, 1, 0) and R = 2 draws
