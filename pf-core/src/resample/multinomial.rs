@@ -4,7 +4,7 @@ use super::Resample;
 use super::offspring::{Runs, walk};
 use super::poisson::{Thresholds, distinct_sorted};
 use crate::simd::LANES;
-use crate::simd::math::floor_index;
+use crate::simd::math::{floor_index, unit_from_bits};
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::{Rng, RngExt};
 use std::cell::RefCell;
@@ -146,7 +146,7 @@ impl Points {
         for u in pos[..m].chunks_mut(LANES) {
             let bits = lanes.step();
             for (u, &b) in u.iter_mut().zip(bits.iter()) {
-                *u += f64::from_bits((b >> 12) | 0x3ff0_0000_0000_0000) - 1.0;
+                *u += unit_from_bits(b);
             }
         }
         pos[m..].fill(f64::INFINITY);

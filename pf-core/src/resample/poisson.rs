@@ -3,6 +3,7 @@
 //! conditioning a Poisson total, and the runs of ancestors they leave.
 
 use super::offspring::{Runs, SCAN};
+use crate::simd::math::unit_from_bits;
 use crate::simd::{LANES, LaneRng};
 use rand::{Rng, RngExt};
 
@@ -83,12 +84,6 @@ pub(crate) fn distinct_sorted<R: Rng + ?Sized>(
 /// thinned at once; `QUICK` means "`QUICK` or more", finished one by one.
 const QUICK: usize = 4;
 
-/// A 52-bit uniform on [0, 1) from raw bits (the exponent trick, which vectorises).
-#[inline(always)]
-fn unit(b: u64) -> f64 {
-    f64::from_bits((b >> 12) | 0x3ff0_0000_0000_0000) - 1.0
-}
-
 /// `counts[j] ←` (with `add`, `+=`) the number of kept candidates of particle `j`: a
 /// Poisson(`rate`) number of candidates (`th` its thresholds), each kept with probability
 /// `keep(j) ∈ [0, 1]`. Returns the sum of the new counts.
@@ -131,7 +126,7 @@ pub(crate) fn thin<R: Rng + ?Sized>(
                 _ => 2.0,
             };
             let f2 = if cq == 3 { 1.0 - pq * pq * pq } else { 2.0 };
-            let uq = unit(u[q]);
+            let uq = unit_from_bits(u[q]);
             k[q] = usize::from(uq >= f0) + usize::from(uq >= f1) + usize::from(uq >= f2);
             c[q] = cq;
         }

@@ -140,7 +140,7 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
                         }
                     }
                 }
-                distinct_sorted(t.max(1), t - r, rng, removed);
+                distinct_sorted(t, t - r, rng, removed);
                 write_runs(counts, removed, &floor, ancestors);
             },
         );

@@ -64,6 +64,13 @@ pub(crate) fn floor_index(x: f64) -> (usize, f64) {
     (k as usize, if above { r - 1.0 } else { r })
 }
 
+/// A uniform on [0, 1) from the top 52 bits of `b`, exactly `⌊b/2¹²⌋·2⁻⁵²`, by the exponent
+/// trick (AVX2 has no integer-to-float conversion for 64-bit lanes).
+#[inline(always)]
+pub(crate) fn unit_from_bits(b: u64) -> f64 {
+    f64::from_bits((b >> 12) | 0x3ff0_0000_0000_0000) - 1.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
