@@ -275,6 +275,32 @@ pub fn pearson_pooled(observed: &[usize], pmf: impl Fn(usize) -> f64) -> (f64, u
     (stat, bins)
 }
 
+/// `ln k!`, summed (exact enough for the small `k` of the law tests).
+fn ln_factorial(k: usize) -> f64 {
+    (2..=k).map(|i| (i as f64).ln()).sum()
+}
+
+/// `P(N = k)` for `N ~ Poisson(λ)`, `λ > 0`.
+pub fn poisson_pmf(lambda: f64, k: usize) -> f64 {
+    (k as f64 * lambda.ln() - lambda - ln_factorial(k)).exp()
+}
+
+/// `P(K = k)` for `K ~ Binomial(n, p)`, `0 < p < 1`, `k ≤ n`.
+pub fn binomial_pmf(n: usize, p: f64, k: usize) -> f64 {
+    multinomial_pmf(&[k, n - k], &[p, 1.0 - p])
+}
+
+/// `P(K = counts)` for `K ~ Multinomial(Σ counts; p)`, every `p_i > 0`.
+pub fn multinomial_pmf(counts: &[usize], p: &[f64]) -> f64 {
+    let n: usize = counts.iter().sum();
+    let ln: f64 = counts
+        .iter()
+        .zip(p)
+        .map(|(&k, &pi)| k as f64 * pi.ln() - ln_factorial(k))
+        .sum();
+    (ln_factorial(n) + ln).exp()
+}
+
 /// The 0.999 quantile of chi-square with `df ≥ 1` degrees of freedom (Wilson–Hilferty,
 /// within 1 % for `df ≥ 2`; 10.83 exactly at `df = 1`).
 pub fn chi2_quantile_999(df: usize) -> f64 {
@@ -332,5 +358,16 @@ mod tests {
             joint_gaussian_posterior(&model, &[]),
             Err(CoreError::Empty { .. })
         ));
+    }
+
+    /// The law helpers against hand-computed values, and each sums to 1.
+    #[test]
+    fn law_helpers_are_the_laws() {
+        assert!((binomial_pmf(4, 0.5, 2) - 0.375).abs() < 1e-14);
+        assert!((multinomial_pmf(&[1, 1, 2], &[0.25, 0.25, 0.5]) - 0.1875).abs() < 1e-14);
+        assert!((poisson_pmf(2.0, 3) - 8.0 / 6.0 * (-2.0f64).exp()).abs() < 1e-14);
+        let poisson: f64 = (0..60).map(|k| poisson_pmf(3.5, k)).sum();
+        let binomial: f64 = (0..=20).map(|k| binomial_pmf(20, 0.3, k)).sum();
+        assert!((poisson - 1.0).abs() < 1e-12 && (binomial - 1.0).abs() < 1e-12);
     }
 }

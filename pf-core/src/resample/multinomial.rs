@@ -221,7 +221,7 @@ mod tests {
     use super::*;
     use crate::mc::stream_rng;
     use crate::resample::offspring::cumulative;
-    use crate::testing::{chi2_quantile_999, pearson_pooled};
+    use crate::testing::{binomial_pmf, chi2_quantile_999, multinomial_pmf, pearson_pooled};
 
     fn weights(n: usize, skew: i32) -> Vec<f64> {
         let raw: Vec<f64> = (1..=n)
@@ -323,17 +323,12 @@ mod tests {
             }
             *seen.entry(k).or_insert(0usize) += 1;
         }
-        let fact = |n: usize| (1..=n).product::<usize>() as f64;
         let mut chi2 = 0.0;
         let mut outcomes = 0;
         for a in 0..=m {
             for b in 0..=m - a {
                 let c = m - a - b;
-                let p = fact(m) / (fact(a) * fact(b) * fact(c))
-                    * w[0].powi(a as i32)
-                    * w[1].powi(b as i32)
-                    * w[2].powi(c as i32);
-                let e = p * reps as f64;
+                let e = multinomial_pmf(&[a, b, c], &w) * reps as f64;
                 let o = seen.get(&[a, b, c]).copied().unwrap_or(0) as f64;
                 chi2 += (o - e).powi(2) / e;
                 outcomes += 1;
@@ -364,12 +359,7 @@ mod tests {
             }
         }
         for (j, h) in hist.iter().enumerate() {
-            let p = w[j];
-            let ln_pmf = |k: usize| {
-                let ln_choose: f64 = (1..=k).map(|i| ((m - k + i) as f64 / i as f64).ln()).sum();
-                ln_choose + k as f64 * p.ln() + (m - k) as f64 * (1.0 - p).ln()
-            };
-            let (stat, df) = pearson_pooled(h, |k| ln_pmf(k).exp());
+            let (stat, df) = pearson_pooled(h, |k| binomial_pmf(m, w[j], k));
             assert!(
                 stat < chi2_quantile_999(df),
                 "particle {j}: χ² {stat} on {df} df"

@@ -152,7 +152,7 @@ mod tests {
     use super::*;
     use crate::mc::stream_rng;
     use crate::resample::offspring_counts;
-    use crate::testing::{chi2_quantile_999, pearson_pooled};
+    use crate::testing::{binomial_pmf, chi2_quantile_999, multinomial_pmf, pearson_pooled};
 
     /// Floors first: every particle gets at least `⌊M·W_j⌋`, exactly `M` ancestors come
     /// out, in increasing order, on both kernels alike.
@@ -251,12 +251,7 @@ mod tests {
         for i in 0..=2usize {
             for j in 0..=2 - i {
                 let l = 2 - i - j;
-                let fact = |n: usize| (1..=n).product::<usize>() as f64;
-                let prob = 2.0 / (fact(i) * fact(j) * fact(l))
-                    * p[0].powi(i as i32)
-                    * p[1].powi(j as i32)
-                    * p[2].powi(l as i32);
-                let e = prob * reps as f64;
+                let e = multinomial_pmf(&[i, j, l], &p) * reps as f64;
                 let o = seen.get(&[i, j, l]).copied().unwrap_or(0) as f64;
                 chi2 += (o - e).powi(2) / e;
             }
@@ -284,11 +279,7 @@ mod tests {
             residual(Simd::Auto, &w, &mut rng, &mut a);
             hist[offspring_counts(&a, 64)[0] - floors[0]] += 1;
         }
-        let pmf = |k: usize| {
-            let ln_choose: f64 = (1..=k).map(|i| ((r - k + i) as f64 / i as f64).ln()).sum();
-            (ln_choose + k as f64 * p0.ln() + (r - k) as f64 * (1.0 - p0).ln()).exp()
-        };
-        let (chi2, df) = pearson_pooled(&hist, pmf);
+        let (chi2, df) = pearson_pooled(&hist, |k| binomial_pmf(r, p0, k));
         assert!(df >= 2, "{df} df");
         assert!(chi2 < chi2_quantile_999(df), "χ² {chi2} on {df} df");
     }
