@@ -34,6 +34,7 @@ pub mod mc;
 pub mod metrics;
 pub mod model;
 pub mod models;
+pub mod names;
 pub mod observe;
 pub mod particles;
 pub mod resample;

@@ -68,10 +68,7 @@ impl Scale {
 impl std::str::FromStr for Scale {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
-        Scale::ALL
-            .into_iter()
-            .find(|v| v.name() == s)
-            .ok_or_else(|| format!("unknown scale '{s}' (expected quick, default or full)"))
+        crate::names::parse_name("scale", &Scale::ALL, Scale::name, s)
     }
 }
 

@@ -48,6 +48,13 @@ pub enum Association {
 }
 
 impl Association {
+    /// Every method.
+    pub const ALL: [Association; 3] = [
+        Association::Energy,
+        Association::EnergyPerMeasurement,
+        Association::Nearest,
+    ];
+
     /// The name used in configs and on the command line.
     pub fn name(self) -> &'static str {
         match self {
@@ -61,16 +68,7 @@ impl Association {
 impl std::str::FromStr for Association {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
-        [
-            Association::Energy,
-            Association::EnergyPerMeasurement,
-            Association::Nearest,
-        ]
-        .into_iter()
-        .find(|a| a.name() == s)
-        .ok_or_else(|| {
-            format!("unknown association '{s}' (expected energy, energy_per_measurement or nn)")
-        })
+        pf_core::names::parse_name("association", &Association::ALL, Association::name, s)
     }
 }
 

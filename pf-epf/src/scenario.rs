@@ -70,12 +70,7 @@ impl Scenario {
 impl std::str::FromStr for Scenario {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
-        Scenario::ALL
-            .into_iter()
-            .find(|c| c.name() == s)
-            .ok_or_else(|| {
-                format!("unknown scenario '{s}' (expected van-plane, walking-men or ants)")
-            })
+        pf_core::names::parse_name("scenario", &Scenario::ALL, Scenario::name, s)
     }
 }
 

@@ -81,12 +81,7 @@ impl Resampler {
 impl std::str::FromStr for Resampler {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        Resampler::ALL
-            .into_iter()
-            .find(|r| r.name() == s)
-            .ok_or_else(|| {
-                format!("unknown resampler '{s}' (expected multinomial, systematic, stratified or residual)")
-            })
+        crate::names::parse_name("resampler", &Resampler::ALL, Resampler::name, s)
     }
 }
 
