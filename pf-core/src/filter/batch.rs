@@ -30,8 +30,8 @@
 use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
-use crate::resample::{Resample, Resampler, SCAN, prefix4};
-use crate::simd::math::{ceil_index, exp_nonpositive};
+use crate::resample::{Resample, Resampler, SCAN, prefix4_each};
+use crate::simd::math::{ceil_index, exp_nonpositive, exp_nonpositive_lanes};
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::RngExt;
 use rayon::prelude::*;
@@ -570,23 +570,24 @@ fn chunk_step<M: ScalarModel>(
     if ctx.keep_lw {
         lws.copy_from_slice(l);
     }
-    // Weights relative to the chunk maximum (an all-zero chunk keeps zeros), their
-    // cumulative sums (the resamplers' `prefix4`), and their squares four lanes at a time.
+    // Weights relative to the chunk maximum (an all-zero chunk keeps zeros), EXP_LANES at a
+    // time, then their cumulative sums (the resamplers' `prefix4`) with their squares
+    // summed four lanes at a time on the way.
     let shift = if m == f64::NEG_INFINITY { 0.0 } else { m };
-    for v in l.iter_mut() {
+    let mut blocks = l.chunks_exact_mut(EXP_LANES);
+    for b in &mut blocks {
+        let v: [f64; EXP_LANES] = std::array::from_fn(|k| b[k] - shift);
+        b.copy_from_slice(&exp_nonpositive_lanes(v));
+    }
+    for v in blocks.into_remainder() {
         *v = exp_nonpositive(*v - shift);
     }
-    let sum = prefix4(l, 0.0, cws);
     let mut sq4 = [0.0; 4];
-    let mut ws = l.chunks_exact(4);
-    for w in &mut ws {
-        for k in 0..4 {
-            sq4[k] += w[k] * w[k];
+    let sum = prefix4_each(l, 0.0, cws, |w| {
+        for (sq, &w) in sq4.iter_mut().zip(w) {
+            *sq += w * w;
         }
-    }
-    for &w in ws.remainder() {
-        sq4[0] += w * w;
-    }
+    });
     ChunkStat {
         max: m,
         bad: None,
@@ -627,6 +628,9 @@ fn boundary<M>(ctx: &StepCtx<'_, M>, u: f64, j: usize) -> usize {
 /// Padding after a chunk's scratch, for the unconditional four-wide stores of
 /// [`systematic_gather`].
 const PAD: usize = 4;
+
+/// Weights exponentiated together by [`exp_nonpositive_lanes`]: four AVX2 registers.
+const EXP_LANES: usize = 16;
 
 /// States of the ancestors of the outputs `lo .. lo + len` under systematic resampling with
 /// uniform `u`, into `out[..len]` (`out` has [`PAD`] more slots, overwritten freely).

@@ -31,7 +31,7 @@ pub use residual::Residual;
 pub use stratified::Stratified;
 pub use systematic::Systematic;
 
-pub(crate) use offspring::{SCAN, prefix4};
+pub(crate) use offspring::{SCAN, prefix4_each};
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};

@@ -26,7 +26,19 @@ const PAD: usize = 4;
 /// In each block of four, `w₀, w₀+w₁, (w₀+w₁)+w₂, (w₀+w₁)+(w₂+w₃)` are added to the carry:
 /// the sums are non-decreasing for non-negative `w`, and the last one carries on.
 #[inline(always)]
-pub(crate) fn prefix4(w: &[f64], mut carry: f64, out: &mut [f64]) -> f64 {
+pub(crate) fn prefix4(w: &[f64], carry: f64, out: &mut [f64]) -> f64 {
+    prefix4_each(w, carry, out, |_| {})
+}
+
+/// [`prefix4`], calling `visit` on each block of (up to) four weights as it is summed, so
+/// that another reduction over the weights needs no pass of its own.
+#[inline(always)]
+pub(crate) fn prefix4_each(
+    w: &[f64],
+    mut carry: f64,
+    out: &mut [f64],
+    mut visit: impl FnMut(&[f64]),
+) -> f64 {
     let mut o4 = out.chunks_exact_mut(4);
     let mut w4 = w.chunks_exact(4);
     for (o, w) in (&mut o4).zip(&mut w4) {
@@ -37,11 +49,14 @@ pub(crate) fn prefix4(w: &[f64], mut carry: f64, out: &mut [f64]) -> f64 {
         o[2] = carry + (s01 + w[2]);
         o[3] = carry + (s01 + s23);
         carry = o[3];
+        visit(w);
     }
-    for (o, &w) in o4.into_remainder().iter_mut().zip(w4.remainder()) {
+    let rest = w4.remainder();
+    for (o, &w) in o4.into_remainder().iter_mut().zip(rest) {
         carry += w;
         *o = carry;
     }
+    visit(rest);
     carry
 }
 

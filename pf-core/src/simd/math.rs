@@ -28,20 +28,47 @@ pub(crate) const ROUND_MAGIC: f64 = 6_755_399_441_055_744.0;
 /// A NaN argument gives an unspecified value (the filter rejects NaN weights before).
 #[inline(always)]
 pub fn exp_nonpositive(x: f64) -> f64 {
+    let [y] = exp_nonpositive_lanes([x]);
+    y
+}
+
+/// [`exp_nonpositive`] of each of `L` values, each operation applied to every lane before
+/// the next.
+///
+/// The evaluation is one long chain of dependent operations (about 80 cycles of latency
+/// for 28 vector instructions, a division among them), and the CPU's scheduler holds only
+/// a few loop iterations of it, so a plain vectorised loop waits on latency. With `L = 16`
+/// each step issues four independent AVX2 instructions, and the filter's `exp` pass runs
+/// about 7 % faster (criterion, 2026-11-24). Every lane performs the same operations as
+/// the one-lane case, so the results are the same bits.
+#[inline(always)]
+pub fn exp_nonpositive_lanes<const L: usize>(x: [f64; L]) -> [f64; L] {
     // k = round(x / ln 2) by the magic-number trick (no `round`, which is a libm call on
-    // baseline x86-64); kf is k as a double, k_bits its two's complement in the low bits.
-    let t = x * std::f64::consts::LOG2_E + ROUND_MAGIC;
-    let kf = t - ROUND_MAGIC;
-    let k_bits = t.to_bits().wrapping_sub(ROUND_MAGIC.to_bits());
-    let hi = x - kf * LN2_HI;
-    let lo = kf * LN2_LO;
-    let r = hi - lo;
-    let rr = r * r;
-    let c = r - rr * (P1 + rr * (P2 + rr * (P3 + rr * (P4 + rr * P5))));
-    let y = 1.0 + (r * c / (2.0 - c) - lo + hi);
-    // y ∈ [½√2, √2] and k ≥ −1021 on [−708, 0], so adding k to the exponent stays normal.
-    let scaled = f64::from_bits(y.to_bits().wrapping_add(k_bits << 52));
-    if x >= -708.0 { scaled } else { 0.0 }
+    // baseline x86-64); kf is k as a double; t keeps k's two's complement in its low bits.
+    let t = each::<L>(|i| x[i] * std::f64::consts::LOG2_E + ROUND_MAGIC);
+    let kf = each::<L>(|i| t[i] - ROUND_MAGIC);
+    let hi = each::<L>(|i| x[i] - kf[i] * LN2_HI);
+    let lo = each::<L>(|i| kf[i] * LN2_LO);
+    let r = each::<L>(|i| hi[i] - lo[i]);
+    let rr = each::<L>(|i| r[i] * r[i]);
+    let c = each::<L>(|i| {
+        let rr = rr[i];
+        r[i] - rr * (P1 + rr * (P2 + rr * (P3 + rr * (P4 + rr * P5))))
+    });
+    let y = each::<L>(|i| 1.0 + (r[i] * c[i] / (2.0 - c[i]) - lo[i] + hi[i]));
+    each(|i| {
+        let k_bits = t[i].to_bits().wrapping_sub(ROUND_MAGIC.to_bits());
+        // y ∈ [½√2, √2] and k ≥ −1021 on [−708, 0], so adding k to the exponent stays
+        // normal.
+        let scaled = f64::from_bits(y[i].to_bits().wrapping_add(k_bits << 52));
+        if x[i] >= -708.0 { scaled } else { 0.0 }
+    })
+}
+
+/// `[f(0), …, f(L − 1)]`: one step of a computation over lanes.
+#[inline(always)]
+fn each<const L: usize>(f: impl FnMut(usize) -> f64) -> [f64; L] {
+    std::array::from_fn(f)
 }
 
 /// `⌈x⌉` for `−1 < x < 2⁵¹`, as an index, in float and integer operations that vectorise
