@@ -676,13 +676,15 @@ fn systematic_gather<M>(ctx: &StepCtx<'_, M>, u: f64, lo: usize, len: usize, out
                 kb[m - 1] = len;
             }
             // Past the chunk's end, boundaries are capped at `len`, so further particles
-            // only write into the padding: the end is checked once per block.
+            // only write into the padding: the end is checked once per block. Boundaries
+            // never decrease, so the next run starts at `k` (as in `Runs::push`).
             for (&k, &x) in kb[..m].iter().zip(&ctx.x_old[j..j + m]) {
                 out[pos..pos + PAD].copy_from_slice(&[x; PAD]);
                 if k > pos + PAD {
                     out[pos + PAD..k].fill(x);
                 }
-                pos = pos.max(k);
+                debug_assert!(k >= pos, "boundaries never decrease");
+                pos = k;
             }
             if pos >= len {
                 break 'walk;
