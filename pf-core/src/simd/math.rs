@@ -164,6 +164,23 @@ mod tests {
         }
     }
 
+    /// The lane-wise form returns, lane by lane, the bits of the one-lane form (which is
+    /// what the filter's AVX2 and portable kernels are each compared with).
+    #[test]
+    fn lanes_give_the_bits_of_one_lane() {
+        let xs: [f64; 64] = std::array::from_fn(|i| match i {
+            0 => f64::NEG_INFINITY,
+            1 => -708.5,
+            2 => -708.0,
+            3 => -0.0,
+            _ => -(i as f64).powf(1.7) * 0.37,
+        });
+        let lanes = exp_nonpositive_lanes(xs);
+        for (x, y) in xs.iter().zip(lanes) {
+            assert_eq!(y.to_bits(), exp_nonpositive(*x).to_bits(), "x = {x}");
+        }
+    }
+
     #[test]
     fn exp_underflows_to_zero() {
         assert_eq!(exp_nonpositive(-708.5), 0.0);
