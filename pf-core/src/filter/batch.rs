@@ -363,33 +363,23 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             }
         };
         let gs = per_group * c;
+        // The same zip of groups, over std's iterators on one thread or rayon's on the pool
+        // (`Par::Seq` never touches rayon's global pool).
+        macro_rules! run_groups {
+            ($chunks:ident, $iter:ident) => {
+                self.x_new
+                    .$chunks(gs)
+                    .zip(self.cw_new.$chunks(gs))
+                    .zip(self.lw_new.$chunks(gs))
+                    .zip(self.rngs.$chunks(per_group))
+                    .zip(self.stats.$chunks(per_group).zip(self.scratch.$iter()))
+                    .enumerate()
+                    .for_each(work)
+            };
+        }
         match self.cfg.par {
-            Par::Seq => self
-                .x_new
-                .chunks_mut(gs)
-                .zip(self.cw_new.chunks_mut(gs))
-                .zip(self.lw_new.chunks_mut(gs))
-                .zip(self.rngs.chunks_mut(per_group))
-                .zip(
-                    self.stats
-                        .chunks_mut(per_group)
-                        .zip(self.scratch.iter_mut()),
-                )
-                .enumerate()
-                .for_each(work),
-            Par::Rayon => self
-                .x_new
-                .par_chunks_mut(gs)
-                .zip(self.cw_new.par_chunks_mut(gs))
-                .zip(self.lw_new.par_chunks_mut(gs))
-                .zip(self.rngs.par_chunks_mut(per_group))
-                .zip(
-                    self.stats
-                        .par_chunks_mut(per_group)
-                        .zip(self.scratch.par_iter_mut()),
-                )
-                .enumerate()
-                .for_each(work),
+            Par::Seq => run_groups!(chunks_mut, iter_mut),
+            Par::Rayon => run_groups!(par_chunks_mut, par_iter_mut),
         }
         if let Some((index, value)) = self.stats.iter().find_map(|s| s.bad) {
             return Err(CoreError::NonFiniteWeight { t, index, value });
