@@ -98,16 +98,13 @@ pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<()> {
     }
 }
 
-/// Reject a non-finite bearing `y_k`.
-pub(crate) fn check_bearing(k: usize, value: f64) -> Result<()> {
+/// Reject a non-finite data value: element `k` of `what` (a bearing `y_k`, an observer
+/// state, a mean).
+pub(crate) fn check_data(what: &'static str, k: usize, value: f64) -> Result<()> {
     if value.is_finite() {
         Ok(())
     } else {
-        Err(HomotopyError::NonFiniteData {
-            what: "bearing",
-            k,
-            value,
-        })
+        Err(HomotopyError::NonFiniteData { what, k, value })
     }
 }
 

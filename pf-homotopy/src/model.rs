@@ -17,7 +17,7 @@ use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{HomotopyError, Result, check_bearing, check_finite, check_positive};
+use crate::error::{HomotopyError, Result, check_data, check_finite, check_positive};
 use pf_core::geometry::wrap_angle;
 
 /// The target state `[x, y, ẋ, ẏ]`.
@@ -314,15 +314,9 @@ impl Realisation {
         }
         for (i, (&y, o)) in bearings.iter().zip(observer).enumerate() {
             let k = i + 1;
-            check_bearing(k, y)?;
+            check_data("bearing", k, y)?;
             for &v in o.pos.iter().chain(&o.vel) {
-                if !v.is_finite() {
-                    return Err(HomotopyError::NonFiniteData {
-                        what: "observer state",
-                        k,
-                        value: v,
-                    });
-                }
+                check_data("observer state", k, v)?;
             }
         }
         Ok(())

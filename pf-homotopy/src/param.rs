@@ -18,7 +18,7 @@
 
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
-use crate::error::{HomotopyError, Result};
+use crate::error::{Result, check_data};
 
 /// A `D`-variate Gaussian `N(μ, Σ)`: the density family `f(·; θ)`.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -90,12 +90,8 @@ impl<const D: usize> Gaussian<D> {
 
     /// Check that the mean is finite and Σ symmetric positive definite.
     pub fn validate(&self, what: &'static str) -> Result<()> {
-        if let Some((i, &v)) = self.mean.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(HomotopyError::NonFiniteData {
-                what,
-                k: i,
-                value: v,
-            });
+        for (i, &v) in self.mean.iter().enumerate() {
+            check_data(what, i, v)?;
         }
         let m = DMatrix::from_fn(D, D, |i, j| self.cov[(i, j)]);
         pf_core::gaussian::cholesky(what, &m)?;

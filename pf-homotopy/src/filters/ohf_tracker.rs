@@ -10,7 +10,7 @@
 
 use nalgebra::{Matrix2, Matrix4, Vector2};
 
-use crate::error::{Result, check_bearing};
+use crate::error::{Result, check_data};
 use crate::model::{Realisation, ScenarioConfig};
 use crate::ohf::{OhfConfig, OhfDiagnostics, OhfWorkspace, correct};
 use crate::param::Gaussian;
@@ -46,7 +46,7 @@ impl OhfTracker {
         scenario.validate()?;
         config.validate()?;
         grid.validate()?;
-        check_bearing(1, y1)?;
+        check_data("bearing", 1, y1)?;
         Ok(Self {
             config,
             grid,
@@ -106,7 +106,7 @@ impl OhfTracker {
         record_at: &[f64],
         on_lambda: impl FnMut(f64, &Gaussian<2>),
     ) -> Result<()> {
-        check_bearing(k, y)?;
+        check_data("bearing", k, y)?;
         let prior_p = self.position();
         let quad = PolarGrid::new(self.grid, rho, y, self.sigma);
         let merged;

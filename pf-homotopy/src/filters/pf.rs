@@ -22,7 +22,7 @@ use pf_core::{Proposal, StateSpaceModel, TransitionDensity};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::error::{HomotopyError, Result, check_bearing};
+use crate::error::{HomotopyError, Result, check_data};
 use crate::model::bearing;
 use crate::model::{PriorConfig, Realisation, ScenarioConfig, State};
 use crate::prior::sample_prior;
@@ -53,7 +53,7 @@ impl BotModel {
     /// An invalid scenario, or non-finite inputs.
     pub fn new(scenario: &ScenarioConfig, observer: Vec<[f64; 2]>, y1: f64) -> Result<Self> {
         scenario.validate()?;
-        check_bearing(1, y1)?;
+        check_data("bearing", 1, y1)?;
         let q = scenario.q_matrix();
         let chol = q.cholesky().ok_or(HomotopyError::InvalidParameter {
             name: "q",

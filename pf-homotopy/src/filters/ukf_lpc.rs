@@ -22,7 +22,7 @@
 use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 use pf_core::kalman::{KalmanState, Ukf, UkfParams};
 
-use crate::error::{Result, check_bearing};
+use crate::error::{Result, check_data};
 use crate::model::bearing;
 use crate::model::{ObserverState, Realisation, ScenarioConfig};
 use pf_core::geometry::wrap_angle;
@@ -93,7 +93,7 @@ impl UkfLpc {
         o1: &ObserverState,
     ) -> Result<Self> {
         scenario.validate()?;
-        check_bearing(1, y1)?;
+        check_data("bearing", 1, y1)?;
         let pr = scenario.prior;
         let sigma = scenario.sigma();
         let mut ukf = Ukf::new(params)?;
