@@ -188,9 +188,10 @@ pub(crate) fn write_runs(
             *k = kept;
         }
         for (q, &k) in kb.iter().enumerate() {
-            if runs.push(out, j0 + q, k) {
-                return;
-            }
+            runs.push(out, j0 + q, k);
+        }
+        if runs.is_full(out.len()) {
+            return;
         }
     }
 }
