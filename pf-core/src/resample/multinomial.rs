@@ -41,7 +41,7 @@ pub struct Multinomial;
 
 impl Resample for Multinomial {
     fn resample<R: Rng + ?Sized>(&self, w: &[f64], rng: &mut R, ancestors: &mut [usize]) {
-        multinomial_draws(Simd::Auto, w.len(), |j| w[j], rng, ancestors);
+        multinomial_draws(Simd::Auto, w, rng, ancestors);
     }
 }
 
@@ -177,17 +177,16 @@ impl Points {
     }
 }
 
-/// `out` ← `M = out.len()` independent draws from the weights `w(0), …, w(n − 1)` (summing
-/// to 1 up to rounding), in increasing order, in O(M + n): see [`Multinomial`].
+/// `out` ← `M = out.len()` independent draws from the weights `w` (summing to 1 up to
+/// rounding), in increasing order, in O(M + N): see [`Multinomial`].
 pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
     simd: Simd,
-    n: usize,
-    w: impl Fn(usize) -> f64,
+    w: &[f64],
     rng: &mut R,
     out: &mut [usize],
 ) {
     let m = out.len();
-    if m == 0 || n == 0 {
+    if m == 0 || w.is_empty() {
         return;
     }
     let mut lanes = LaneRng::from_rng(rng);
@@ -201,10 +200,9 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
                 points.draw(m, &mut lanes, rng);
                 let points = &*points;
                 walk(
-                    n,
                     w,
                     #[inline(always)]
-                    |_, c, k| {
+                    |c, k| {
                         for (k, &c) in k.iter_mut().zip(c) {
                             *k = points.below(mf, c);
                         }
@@ -276,7 +274,7 @@ mod tests {
                     .collect();
                 for simd in [Simd::Auto, Simd::Portable] {
                     let mut fast = vec![0; m];
-                    multinomial_draws(simd, n, |j| w[j], &mut stream_rng(9, m as u64), &mut fast);
+                    multinomial_draws(simd, &w, &mut stream_rng(9, m as u64), &mut fast);
                     assert_eq!(fast, plain, "N = {n}, M = {m}, {simd:?}");
                 }
             }
@@ -316,7 +314,7 @@ mod tests {
         let mut rng = stream_rng(11, 0);
         let mut out = [0usize; 4];
         for _ in 0..reps {
-            multinomial_draws(Simd::Auto, 3, |j| w[j], &mut rng, &mut out);
+            multinomial_draws(Simd::Auto, &w, &mut rng, &mut out);
             let mut k = [0usize; 3];
             for &a in &out {
                 k[a] += 1;
@@ -349,7 +347,7 @@ mod tests {
         let mut rng = stream_rng(12, 0);
         let mut out = vec![0usize; m];
         for _ in 0..20_000 {
-            multinomial_draws(Simd::Auto, 3, |j| w[j], &mut rng, &mut out);
+            multinomial_draws(Simd::Auto, &w, &mut rng, &mut out);
             let mut k = [0usize; 3];
             for &a in &out {
                 k[a] += 1;
@@ -372,7 +370,7 @@ mod tests {
     #[test]
     fn zero_weights_go_to_the_last_particle() {
         let mut out = vec![7usize; 10];
-        multinomial_draws(Simd::Auto, 3, |_| 0.0, &mut stream_rng(1, 0), &mut out);
+        multinomial_draws(Simd::Auto, &[0.0; 3], &mut stream_rng(1, 0), &mut out);
         assert!(out.iter().all(|&a| a == 2));
     }
 }

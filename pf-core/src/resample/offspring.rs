@@ -104,32 +104,25 @@ impl Runs {
     }
 }
 
-/// Offspring counting over `n` particles with weights `w(j)` into `out` (length `M`):
-/// blocks of [`SCAN`] particles get their cumulative weights ([`prefix4`]), then
-/// `boundaries(j₀, C, k)` turns the block's `C` into its boundaries `k` (a vectorisable
-/// loop for the arithmetic schemes), then the runs are written. The last particle's
-/// boundary is forced to `M`.
+/// Offspring counting over the weights `w` into `out` (length `M`): blocks of [`SCAN`]
+/// particles get their cumulative weights ([`prefix4`]), then `boundaries(C, k)` turns the
+/// block's `C` into its boundaries `k` (a vectorisable loop for the arithmetic schemes),
+/// then the runs are written. The last particle's boundary is forced to `M`.
 #[inline(always)]
-pub(crate) fn walk<W, B>(n: usize, w: W, mut boundaries: B, out: &mut [usize])
+pub(crate) fn walk<B>(w: &[f64], mut boundaries: B, out: &mut [usize])
 where
-    W: Fn(usize) -> f64,
-    B: FnMut(usize, &[f64], &mut [usize]),
+    B: FnMut(&[f64], &mut [usize]),
 {
     let m = out.len();
-    let mut wb = [0.0f64; SCAN];
     let mut cb = [0.0f64; SCAN];
     let mut kb = [0usize; SCAN];
     let mut carry = 0.0;
     let mut runs = Runs::new();
-    let mut j0 = 0;
-    while j0 < n {
-        let len = (n - j0).min(SCAN);
-        for (q, x) in wb[..len].iter_mut().enumerate() {
-            *x = w(j0 + q);
-        }
-        carry = prefix4(&wb[..len], carry, &mut cb[..len]);
-        boundaries(j0, &cb[..len], &mut kb[..len]);
-        if j0 + len == n {
+    for (b, wb) in w.chunks(SCAN).enumerate() {
+        let (j0, len) = (b * SCAN, wb.len());
+        carry = prefix4(wb, carry, &mut cb[..len]);
+        boundaries(&cb[..len], &mut kb[..len]);
+        if j0 + len == w.len() {
             kb[len - 1] = m;
         }
         for (q, &k) in kb[..len].iter().enumerate() {
@@ -138,25 +131,24 @@ where
         if runs.is_full(m) {
             return;
         }
-        j0 += len;
     }
 }
 
-/// The cumulative weights [`walk`] uses, for tests and reference merges.
 /// [`walk`] over the weights `w` on the chosen kernels, for the schemes whose boundaries
 /// need nothing but the cumulative weights (systematic and stratified).
 #[inline(always)]
 pub(crate) fn walk_weights<B>(simd: Simd, w: &[f64], boundaries: B, out: &mut [usize])
 where
-    B: FnMut(usize, &[f64], &mut [usize]),
+    B: FnMut(&[f64], &mut [usize]),
 {
     dispatch(
         simd,
         #[inline(always)]
-        || walk(w.len(), |j| w[j], boundaries, out),
+        || walk(w, boundaries, out),
     );
 }
 
+/// The cumulative weights [`walk`] uses, for tests and reference merges.
 #[cfg(test)]
 pub(crate) fn cumulative(w: &[f64]) -> Vec<f64> {
     let mut out = vec![0.0; w.len()];

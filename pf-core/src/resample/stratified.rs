@@ -48,7 +48,7 @@ fn stratified_from_lanes(simd: Simd, w: &[f64], lanes: &mut LaneRng, ancestors: 
         simd,
         w,
         #[inline(always)]
-        |_, c, k| {
+        |c, k| {
             let mut v = lanes.step();
             let (f, t) = (&mut f[..c.len()], &mut t[..c.len()]);
             for ((f, t), &c) in f.iter_mut().zip(t.iter_mut()).zip(c) {

@@ -30,7 +30,7 @@ pub(crate) fn systematic_from_uniform(simd: Simd, w: &[f64], u: f64, ancestors: 
     walk_weights(
         simd,
         w,
-        |_, c, k| {
+        |c, k| {
             for (k, &c) in k.iter_mut().zip(c) {
                 *k = ceil_index(mf * c - u);
             }
