@@ -1,7 +1,7 @@
 //! Multinomial resampling in O(N): a Poisson process of points, conditioned on its size.
 
 use super::Resample;
-use super::offspring::{Runs, walk};
+use super::offspring::walk;
 use super::poisson::{Thresholds, distinct_sorted};
 use crate::simd::LANES;
 use crate::simd::math::{floor_index, unit_from_bits};
@@ -24,14 +24,15 @@ use std::cell::RefCell;
 ///    independent uniforms, so exactly `M` independent uniforms remain. (Points within a
 ///    cell are exchangeable, so removing one of a cell's points is removing its last.)
 ///    `|T − M|` is of order `√M`, drawn from the caller's generator.
-/// 3. **Offsets.** Point `g` of cell `f` sits at `p_g = f + u_g` (in units of `1/M`) with
-///    `u_g` uniform on [0, 1), drawn after the counts are final; a cell's points are not
-///    sorted, only counted.
+/// 3. **Offsets.** Point `g` of cell `f` sits at `f + u_g` (in units of `1/M`) with `u_g`
+///    uniform on [0, 1), drawn after the counts are final; a cell's points are not sorted,
+///    only counted, and only their offsets `u_g` are stored.
 ///
 /// Particle `j`'s boundary, the number of points below its cumulative weight `C_j`, is
 /// with `x = M·C_j` and `f = ⌊x⌋`: every point of the cells before `f` (from a table of
-/// the cells' first points), plus the points of cell `f` with `p_g < x` (one on average,
-/// compared four at a time). The counts and offsets come from a [`LaneRng`] seeded from
+/// the cells' first points), plus the points of cell `f` with `u_g < x − f` (one on
+/// average, compared four at a time; `x − f` is exact, so this is the exact comparison of
+/// the point with `x`). The counts and offsets come from a [`LaneRng`] seeded from
 /// the caller's generator. The
 /// ancestors are exactly those of the textbook merge of the same points with the same
 /// cumulative weights (tested), and the joint law of the offspring counts is multinomial
@@ -63,8 +64,8 @@ thread_local! {
 pub(crate) struct Points {
     /// `first[f]`: index of cell `f`'s first point (`first[M] = first[M + 1] = M`).
     first: Vec<usize>,
-    /// Positions `f + u_g` in cell order (sorted from cell to cell, not within a cell),
-    /// then `PAD` times +∞.
+    /// Offsets `u_g` in cell order (cell `f`'s from `first[f]`), then `PAD` zeros read
+    /// past the last cell and masked off.
     pos: Vec<f64>,
     /// The conditioning step's sorted removals (point indices) or additions (cells).
     fix: Vec<usize>,
@@ -137,38 +138,38 @@ impl Points {
         first[m] = start;
         first[m + 1] = start;
         debug_assert_eq!(start, m);
-        // Positions f + u_g: each cell's index written over its points as a run, then
-        // uniform offsets added.
-        let mut runs = Runs::new();
-        for (f, &end) in first[1..=m].iter().enumerate() {
-            runs.push(&mut pos[..m], f as f64, end);
-        }
+        // Offsets, in cell order.
         for u in pos[..m].chunks_mut(LANES) {
             let bits = lanes.step();
             for (u, &b) in u.iter_mut().zip(bits.iter()) {
-                *u += unit_from_bits(b);
+                *u = unit_from_bits(b);
             }
         }
-        pos[m..].fill(f64::INFINITY);
+        pos[m..].fill(0.0);
     }
 
-    /// Boundary of the cumulative weight `c`: with `x = M·c`, every point of the cells
-    /// before `⌊x⌋`, plus the points of cell `⌊x⌋` below `x`, four compared at a time (a
-    /// cell's points are unsorted, so all of them are compared; the points after it lie at
-    /// `⌊x⌋ + 1` or above and never count).
+    /// Boundary of the cumulative weight `c`: with `x = M·c` and `f = ⌊x⌋`, every point of
+    /// the cells before `f`, plus the points of cell `f` whose offset is below `x − f`, four
+    /// compared at a time (a cell's points are unsorted, so all of them are compared; reads
+    /// past the cell's end are masked off).
     #[inline(always)]
     fn below(&self, mf: f64, c: f64) -> usize {
         let m = self.first.len() - 2;
         let x = mf * c;
-        let cell = floor_index(x).0.min(m);
+        let cell = floor_index(x).0;
+        // `⌊x⌋` back from the integer (exact below 2⁵¹): taking `floor_index`'s double
+        // instead compiled to a branch on its rounding, mispredicted half the time.
+        let t = x - (cell as i64) as f64;
+        let cell = cell.min(m);
         let (mut i, end) = (self.first[cell], self.first[cell + 1]);
         let mut k = i;
         loop {
-            let p: &[f64; PAD] = self.pos[i..i + PAD].try_into().expect("PAD points");
-            k += usize::from(p[0] < x)
-                + usize::from(p[1] < x)
-                + usize::from(p[2] < x)
-                + usize::from(p[3] < x);
+            let u: &[f64; PAD] = self.pos[i..i + PAD].try_into().expect("PAD offsets");
+            let left = end.saturating_sub(i);
+            k += usize::from((u[0] < t) & (0 < left))
+                + usize::from((u[1] < t) & (1 < left))
+                + usize::from((u[2] < t) & (2 < left))
+                + usize::from((u[3] < t) & (3 < left));
             i += PAD;
             if i >= end {
                 return k;
@@ -248,16 +249,16 @@ mod tests {
             for &m in &[1usize, 5, 23, 200, 301, 1000] {
                 let p = points(m, 9, m as u64);
                 assert_eq!(p.first[m], m);
-                // Every point as (cell, position), in cell order; point (f, p) lies
-                // below the key x when f < ⌊x⌋, or f = ⌊x⌋ and p < x.
+                // Every point as (cell, offset), in cell order; point (f, u) lies
+                // below the key x when f < ⌊x⌋, or f = ⌊x⌋ and u < x − f.
                 let pts: Vec<(usize, f64)> = (0..m)
                     .flat_map(|f| (p.first[f]..p.first[f + 1]).map(move |g| (f, g)))
                     .map(|(f, g)| (f, p.pos[g]))
                     .collect();
                 assert_eq!(pts.len(), m);
-                let below = |(f, p): (usize, f64), x: f64| {
+                let below = |(f, u): (usize, f64), x: f64| {
                     let fx = x.floor();
-                    (f as f64) < fx || ((f as f64) == fx && p < x)
+                    (f as f64) < fx || ((f as f64) == fx && u < x - fx)
                 };
                 let mut sorted = pts.clone();
                 sorted.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
@@ -281,8 +282,8 @@ mod tests {
         }
     }
 
-    /// Whatever the size of the Poisson process, exactly M points come out, each within
-    /// its cell.
+    /// Whatever the size of the Poisson process, exactly M points come out, each offset
+    /// within its cell.
     #[test]
     fn conditioning_gives_exactly_m_points() {
         for m in [1usize, 2, 3, 64, 65, 1000, 4097] {
@@ -293,10 +294,10 @@ mod tests {
                 assert!(p.first.windows(2).all(|w| w[0] <= w[1]));
                 for f in 0..m {
                     for g in p.first[f]..p.first[f + 1] {
-                        assert!((f as f64..=f as f64 + 1.0).contains(&p.pos[g]), "{f}");
+                        assert!((0.0..1.0).contains(&p.pos[g]), "{f}");
                     }
                 }
-                assert!(p.pos[m..].iter().all(|&x| x == f64::INFINITY));
+                assert_eq!(p.pos.len(), m + PAD);
             }
         }
     }
