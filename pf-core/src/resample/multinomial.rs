@@ -66,7 +66,7 @@ pub(crate) struct Points {
     first: Vec<usize>,
     /// Offsets `u_g` in cell order (cell `f`'s from `first[f]`), then `PAD` zeros read
     /// past the last cell and masked off.
-    pos: Vec<f64>,
+    offset: Vec<f64>,
     /// The conditioning step's sorted removals (point indices) or additions (cells).
     fix: Vec<usize>,
 }
@@ -75,7 +75,7 @@ impl Points {
     const fn new() -> Self {
         Points {
             first: Vec::new(),
-            pos: Vec::new(),
+            offset: Vec::new(),
             fix: Vec::new(),
         }
     }
@@ -83,10 +83,10 @@ impl Points {
     /// Draw `m ≥ 1` points: counts and offsets from `lanes`, the conditioning from `rng`.
     #[inline(always)]
     fn draw<R: Rng + ?Sized>(&mut self, m: usize, lanes: &mut LaneRng, rng: &mut R) {
-        let Points { first, pos, fix } = self;
+        let Points { first, offset, fix } = self;
         let poisson1 = Thresholds::new(1.0);
         first.resize(m + 2, 0);
-        pos.resize(m + PAD, 0.0);
+        offset.resize(m + PAD, 0.0);
         // Poisson(1) counts, 64 cells per lane step, into first[..m].
         let mut t = 0usize;
         for cells in first[..m].chunks_mut(LANES) {
@@ -139,13 +139,13 @@ impl Points {
         first[m + 1] = start;
         debug_assert_eq!(start, m);
         // Offsets, in cell order.
-        for u in pos[..m].chunks_mut(LANES) {
+        for u in offset[..m].chunks_mut(LANES) {
             let bits = lanes.step();
             for (u, &b) in u.iter_mut().zip(bits.iter()) {
                 *u = unit_from_bits(b);
             }
         }
-        pos[m..].fill(0.0);
+        offset[m..].fill(0.0);
     }
 
     /// Boundary of the cumulative weight `c`: with `x = M·c` and `f = ⌊x⌋`, every point of
@@ -164,7 +164,7 @@ impl Points {
         let (mut i, end) = (self.first[cell], self.first[cell + 1]);
         let mut k = i;
         loop {
-            let u: &[f64; PAD] = self.pos[i..i + PAD].try_into().expect("PAD offsets");
+            let u: &[f64; PAD] = self.offset[i..i + PAD].try_into().expect("PAD offsets");
             let left = end.saturating_sub(i);
             k += usize::from((u[0] < t) & (0 < left))
                 + usize::from((u[1] < t) & (1 < left))
@@ -253,7 +253,7 @@ mod tests {
                 // below the key x when f < ⌊x⌋, or f = ⌊x⌋ and u < x − f.
                 let pts: Vec<(usize, f64)> = (0..m)
                     .flat_map(|f| (p.first[f]..p.first[f + 1]).map(move |g| (f, g)))
-                    .map(|(f, g)| (f, p.pos[g]))
+                    .map(|(f, g)| (f, p.offset[g]))
                     .collect();
                 assert_eq!(pts.len(), m);
                 let below = |(f, u): (usize, f64), x: f64| {
@@ -294,10 +294,10 @@ mod tests {
                 assert!(p.first.windows(2).all(|w| w[0] <= w[1]));
                 for f in 0..m {
                     for g in p.first[f]..p.first[f + 1] {
-                        assert!((0.0..1.0).contains(&p.pos[g]), "{f}");
+                        assert!((0.0..1.0).contains(&p.offset[g]), "{f}");
                     }
                 }
-                assert_eq!(p.pos.len(), m + PAD);
+                assert_eq!(p.offset.len(), m + PAD);
             }
         }
     }
