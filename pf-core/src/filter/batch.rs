@@ -521,14 +521,21 @@ fn chunk_step<M: ScalarModel>(
     }
     // The prior log-weight: uniform after resampling, the previous one otherwise.
     let l = &mut s.l[..len];
-    match ctx.source {
-        Source::Identity => l.copy_from_slice(&ctx.lw_old[lo..lo + len]),
-        _ => l.fill(ctx.log_uniform),
-    }
-    if let Some(y) = ctx.y {
-        for (l, &x) in l.iter_mut().zip(xs.iter()) {
-            *l += model.log_likelihood_scalar(t, x, y);
+    match (ctx.source, ctx.y) {
+        (Source::Identity, y) => {
+            l.copy_from_slice(&ctx.lw_old[lo..lo + len]);
+            if let Some(y) = y {
+                for (l, &x) in l.iter_mut().zip(xs.iter()) {
+                    *l += model.log_likelihood_scalar(t, x, y);
+                }
+            }
         }
+        (_, Some(y)) => {
+            for (l, &x) in l.iter_mut().zip(xs.iter()) {
+                *l = ctx.log_uniform + model.log_likelihood_scalar(t, x, y);
+            }
+        }
+        (_, None) => l.fill(ctx.log_uniform),
     }
     // Maximum (four running maxima, compare-and-select: the same result on every path) and
     // a flag for NaN or +∞.

@@ -89,8 +89,9 @@ impl Points {
         offset.resize(m + PAD, 0.0);
         // Poisson(1) counts, 64 cells per lane step, into first[..m].
         let mut t = 0usize;
+        let mut bits = [0u64; LANES];
         for cells in first[..m].chunks_mut(LANES) {
-            let bits = lanes.step();
+            lanes.step(&mut bits);
             let mut tail = false;
             for (c, &b) in cells.iter_mut().zip(bits.iter()) {
                 let k = poisson1.count_quick::<QUICK>(b >> 11);
@@ -140,7 +141,7 @@ impl Points {
         debug_assert_eq!(start, m);
         // Offsets, in cell order.
         for u in offset[..m].chunks_mut(LANES) {
-            let bits = lanes.step();
+            lanes.step(&mut bits);
             for (u, &b) in u.iter_mut().zip(bits.iter()) {
                 *u = unit_from_bits(b);
             }

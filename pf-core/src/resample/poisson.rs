@@ -97,13 +97,15 @@ pub(crate) fn thin<R: Rng + ?Sized>(
     rng: &mut R,
 ) -> usize {
     let mut total = 0;
+    let (mut v, mut u) = ([0u64; LANES], [0u64; LANES]);
     for (b, block) in counts.chunks_mut(LANES).enumerate() {
         let j0 = b * LANES;
         let mut p = [0.0f64; LANES];
         for (q, p) in p[..block.len()].iter_mut().enumerate() {
             *p = keep(j0 + q);
         }
-        let (v, u) = (lanes.step(), lanes.step());
+        lanes.step(&mut v);
+        lanes.step(&mut u);
         let mut k = [0usize; LANES];
         let mut c = [0usize; LANES];
         for q in 0..LANES {

@@ -49,7 +49,8 @@ fn stratified_from_lanes(simd: Simd, w: &[f64], lanes: &mut LaneRng, ancestors: 
         w,
         #[inline(always)]
         |c, k| {
-            let mut v = lanes.step();
+            let mut v = [0u64; SCAN];
+            lanes.step(&mut v);
             let (f, t) = (&mut f[..c.len()], &mut t[..c.len()]);
             for ((f, t), &c) in f.iter_mut().zip(t.iter_mut()).zip(c) {
                 let x = mf * c;
@@ -89,7 +90,11 @@ mod tests {
     fn stratum_uniforms(c: &[f64], m: usize, lanes: &LaneRng) -> Vec<Option<f64>> {
         let mut lanes = lanes.clone();
         let v: Vec<u64> = (0..c.len().div_ceil(SCAN))
-            .flat_map(|_| lanes.step())
+            .flat_map(|_| {
+                let mut v = [0; SCAN];
+                lanes.step(&mut v);
+                v
+            })
             .collect();
         let mut u = vec![None; m + 1];
         for (&cj, &vj) in c.iter().zip(&v) {
