@@ -519,23 +519,24 @@ fn chunk_step<M: ScalarModel>(
             gather_propagate(model, t, ctx.x_old, &ctx.ancestors[lo..lo + len], z, xs);
         }
     }
-    // The prior log-weight: uniform after resampling, the previous one otherwise.
+    // The prior log-weight (uniform after resampling, the previous one otherwise) plus the
+    // log-likelihood, in one pass (a fill and then a second pass cost 0.5 instructions per
+    // particle-step, callgrind).
     let l = &mut s.l[..len];
+    let lw_old = &ctx.lw_old[lo..lo + len];
     match (ctx.source, ctx.y) {
-        (Source::Identity, y) => {
-            l.copy_from_slice(&ctx.lw_old[lo..lo + len]);
-            if let Some(y) = y {
-                for (l, &x) in l.iter_mut().zip(xs.iter()) {
-                    *l += model.log_likelihood_scalar(t, x, y);
-                }
+        (Source::Identity, None) => l.copy_from_slice(lw_old),
+        (Source::Identity, Some(y)) => {
+            for ((l, &x), &prior) in l.iter_mut().zip(xs.iter()).zip(lw_old) {
+                *l = prior + model.log_likelihood_scalar(t, x, y);
             }
         }
+        (_, None) => l.fill(ctx.log_uniform),
         (_, Some(y)) => {
             for (l, &x) in l.iter_mut().zip(xs.iter()) {
                 *l = ctx.log_uniform + model.log_likelihood_scalar(t, x, y);
             }
         }
-        (_, None) => l.fill(ctx.log_uniform),
     }
     // Maximum (four running maxima, compare-and-select: the same result on every path) and
     // a flag for NaN or +∞.

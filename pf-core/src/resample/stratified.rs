@@ -49,6 +49,8 @@ fn stratified_from_lanes(simd: Simd, w: &[f64], lanes: &mut LaneRng, ancestors: 
         w,
         #[inline(always)]
         |c, k| {
+            // Local to the block: a buffer kept across blocks made the run writer compile
+            // worse (1.3 % more instructions, callgrind).
             let mut v = [0u64; SCAN];
             lanes.step(&mut v);
             let (f, t) = (&mut f[..c.len()], &mut t[..c.len()]);

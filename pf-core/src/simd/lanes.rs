@@ -175,6 +175,9 @@ impl LaneRng {
                 }
                 rejected
             };
+            // A whole step runs on the output itself, a partial last one on `tail`: with the
+            // length unknown to the compiler the candidate loop stops vectorising (76.7
+            // against 65.2 instructions per particle-step in the filter, callgrind).
             let len = chunk.len();
             let mut rejected = if len == LANES {
                 fill(chunk)
