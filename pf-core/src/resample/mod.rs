@@ -4,9 +4,11 @@
 //! counts every particle's offspring directly (its *boundary*, the number of points below
 //! its cumulative weight, clamped to `M` for the last particle) and writes its ancestors as
 //! runs of copies, with the arithmetic vectorised and compiled for AVX2 where the CPU has
-//! it (`crate::simd`; the numbers are the same either way). The ancestors are exactly those
-//! of the inverse-CDF merge ([`InverseCdf`], kept as the reference and for callers who
-//! need one query at a time) on the same points and the same cumulative weights (tested).
+//! it (`crate::simd`; the numbers are the same either way). For systematic and stratified
+//! resampling the ancestors are exactly those of the inverse-CDF merge ([`InverseCdf`],
+//! kept as the reference and for callers who need one query at a time) on the same points
+//! and the same cumulative weights (tested); multinomial and residual resampling draw each
+//! particle's count without placing points, and their laws are tested by chi-square.
 //! The cumulative weights are summed four at a time, so they may differ from a
 //! left-to-right sum by a few ulp.
 //!
@@ -47,7 +49,7 @@ pub trait Resample: Sync {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Resampler {
-    /// Independent draws (a conditioned Poisson process of points, O(N)).
+    /// Independent draws (Poisson counts per particle, conditioned on their total, O(N)).
     Multinomial,
     /// One uniform shared by all strata.
     #[default]

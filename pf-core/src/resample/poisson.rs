@@ -1,11 +1,12 @@
-//! The Poisson machinery of the O(N) multinomial draws: counts by inversion of 53-bit
-//! uniforms, counts thinned per particle, the uniformly chosen draws removed when
-//! conditioning a Poisson total, and the runs of ancestors they leave.
+//! The Poisson machinery of the O(N) multinomial draws: counts with a rate per particle
+//! (multinomial), counts of one rate thinned per particle (residual), the uniformly chosen
+//! draws removed when conditioning a Poisson total, and the runs of ancestors they leave.
 
 use super::offspring::{Runs, SCAN};
-use crate::simd::math::unit_from_bits;
+use crate::simd::math::{exp_nonpositive_lanes, unit_from_bits};
 use crate::simd::{LANES, LaneRng};
 use rand::{Rng, RngExt};
+use rand_distr::{Distribution, Poisson};
 
 /// Outcomes with a threshold; for the rates this module is used with (at most 4:
 /// `P(N ≥ 48) < 10⁻³⁴` there) the count stops well before the last.
@@ -153,11 +154,141 @@ pub(crate) fn thin<R: Rng + ?Sized>(
     total
 }
 
+/// Standard deviations of a Poisson total by which the first round overshoots its target.
+pub(crate) const OVERSHOOT: f64 = 3.0;
+
+/// Rates above this are drawn by `rand_distr`'s exact sampler (its PTRS rejection, O(1)
+/// whatever the rate) instead of by inversion, whose length grows with the rate.
+const RATE_INVERT: f64 = 12.0;
+
+/// Terms of the distribution function compared in the vectorised pass; a count of `TERMS`
+/// means "`TERMS` or more" and is finished one term at a time.
+const TERMS: usize = 6;
+
+/// `counts[j] ←` (with `add`, `+=`) a Poisson(`λ_j`) count, `λ_j = scale·w_j` (0 where
+/// that is negative or NaN), independent across particles. Returns the sum of the new
+/// counts and the sum of the rates.
+///
+/// Inversion: with one uniform `u` per particle (a lane step per 64 particles), the count
+/// is the first `i` with `u < F_i`, the distribution function summed term by term from
+/// `p_0 = e^{−λ}` by `p_i = p_{i−1}·λ/i`. The first [`TERMS`] terms are compared on all 64
+/// particles at once; the few particles past them, and those with `λ > 12`, are finished
+/// one by one (see [`poisson_rest`]). Exact up to the rounding of the terms (a few ulp of
+/// each probability).
+#[inline(always)]
+pub(crate) fn poisson_counts<R: Rng + ?Sized>(
+    counts: &mut [usize],
+    w: &[f64],
+    scale: f64,
+    add: bool,
+    lanes: &mut LaneRng,
+    rng: &mut R,
+) -> (usize, f64) {
+    debug_assert_eq!(counts.len(), w.len());
+    let mut total = 0;
+    // Eight partial sums of the rates (a vectorisable reduction).
+    let mut rates = [0.0f64; 8];
+    let mut bits = [0u64; LANES];
+    let mut lam = [0.0f64; LANES];
+    let mut k = [0usize; LANES];
+    for (block, wb) in counts.chunks_mut(LANES).zip(w.chunks(LANES)) {
+        let len = block.len();
+        lanes.step(&mut bits);
+        if len < LANES {
+            lam.fill(0.0);
+        }
+        for (l, &w) in lam.iter_mut().zip(wb) {
+            let x = scale * w;
+            *l = if x > 0.0 { x } else { 0.0 };
+        }
+        for l8 in lam.chunks_exact(8) {
+            for (r, l) in rates.iter_mut().zip(l8) {
+                *r += l;
+            }
+        }
+        poisson_block(&lam, &bits, &mut k, rng);
+        for (c, &k) in block.iter_mut().zip(&k) {
+            *c = if add { *c + k } else { k };
+        }
+        total += k[..len].iter().sum::<usize>();
+    }
+    (total, rates.iter().sum())
+}
+
+/// Poisson(`lam[q]`) counts by inversion of the uniforms in `bits`, into `k`.
+#[inline(always)]
+fn poisson_block<R: Rng + ?Sized>(
+    lam: &[f64; LANES],
+    bits: &[u64; LANES],
+    k: &mut [usize; LANES],
+    rng: &mut R,
+) {
+    let mut p = exp_nonpositive_lanes(std::array::from_fn::<f64, LANES, _>(|q| -lam[q]));
+    let u: [f64; LANES] = std::array::from_fn(|q| unit_from_bits(bits[q]));
+    let mut f = [0.0f64; LANES];
+    // Four lanes at a time through all the terms, so that they stay in registers (over all
+    // 64 lanes per term, they went through the stack, and the loads of misaligned vectors
+    // waited on the stores before them).
+    let groups = k
+        .chunks_exact_mut(4)
+        .zip(p.chunks_exact_mut(4).zip(f.chunks_exact_mut(4)))
+        .zip(u.chunks_exact(4).zip(lam.chunks_exact(4)));
+    for ((k, (p, f)), (u, lam)) in groups {
+        let mut k4 = [0usize; 4];
+        let mut p4: [f64; 4] = std::array::from_fn(|l| p[l]);
+        let mut f4 = p4;
+        for i in 1..TERMS {
+            let inv = 1.0 / i as f64;
+            for l in 0..4 {
+                k4[l] += usize::from(u[l] >= f4[l]);
+                p4[l] *= lam[l] * inv;
+                f4[l] += p4[l];
+            }
+        }
+        for l in 0..4 {
+            k[l] = k4[l] + usize::from(u[l] >= f4[l]);
+        }
+        p.copy_from_slice(&p4);
+        f.copy_from_slice(&f4);
+    }
+    let mut rest = 0u64;
+    for q in 0..LANES {
+        rest |= u64::from((k[q] == TERMS) | (lam[q] > RATE_INVERT)) << q;
+    }
+    while rest != 0 {
+        let q = rest.trailing_zeros() as usize;
+        k[q] = poisson_rest(lam[q], u[q], p[q], f[q], rng);
+        rest &= rest - 1;
+    }
+}
+
+/// The count of a particle the vectorised pass left: for `λ ≤ 12`, the inversion continued
+/// from term [`TERMS`] (`p`, `f`: the last term and the sum so far); above, `rand_distr`'s
+/// sampler on `rng`.
+#[cold]
+fn poisson_rest<R: Rng + ?Sized>(lam: f64, u: f64, mut p: f64, mut f: f64, rng: &mut R) -> usize {
+    if lam > RATE_INVERT {
+        // `as` saturates; a rate this large only comes from weights far outside the contract.
+        return Poisson::new(lam).map_or(0, |d| d.sample(rng) as usize);
+    }
+    let mut i = TERMS;
+    loop {
+        p *= lam / i as f64;
+        f += p;
+        // Past the mode, once the terms no longer move the sum, the tail left is below
+        // 2⁻⁵²: stop rather than loop on a sum that rounds short of `u`.
+        if u < f || (i as f64 > lam && p < f * f64::EPSILON) {
+            return i;
+        }
+        i += 1;
+    }
+}
+
 /// Particle `j`'s `base(j)` copies and kept draws (its count less the draws `removed`, an
 /// ascending list of indices among all the counted draws in particle order, then
 /// `usize::MAX`) as one run of copies of `j` in `out`. Boundaries are computed a block at a
-/// time: only a block that holds a removal (one in about every `√M/3` particles) walks its
-/// draws one by one.
+/// time; a block that holds a removal (one in about every `√M/3` particles) also finds the
+/// particle of each removal.
 #[inline(always)]
 pub(crate) fn write_runs(
     counts: &[usize],
@@ -167,7 +298,7 @@ pub(crate) fn write_runs(
 ) {
     let mut runs = Runs::new();
     let (mut drawn, mut kept, mut x) = (0usize, 0usize, 0usize);
-    let mut kb = [0usize; SCAN];
+    let (mut kb, mut ends) = ([0usize; SCAN], [0usize; SCAN]);
     for (b, block) in counts.chunks(SCAN).enumerate() {
         let j0 = b * SCAN;
         let kb = &mut kb[..block.len()];
@@ -176,12 +307,18 @@ pub(crate) fn write_runs(
         }
         let end = drawn + block.iter().sum::<usize>();
         if removed[x] < end {
-            for (k, &c) in kb.iter_mut().zip(block) {
+            // Each removal comes off the particle whose draws hold it: the first whose draws
+            // end above it, found by counting the ends at or below it (a vectorised count
+            // per removal, not a loop with a branch per particle).
+            let ends = &mut ends[..block.len()];
+            for (e, &c) in ends.iter_mut().zip(block) {
                 drawn += c;
-                while removed[x] < drawn {
-                    *k -= 1;
-                    x += 1;
-                }
+                *e = drawn;
+            }
+            while removed[x] < end {
+                let r = removed[x];
+                kb[ends.iter().filter(|&&e| e <= r).count()] -= 1;
+                x += 1;
             }
         }
         drawn = end;
@@ -295,6 +432,93 @@ mod tests {
                 chi2 < chi2_quantile_999(df),
                 "Λ = {rate}, p = {p}: χ² {chi2} on {df} df"
             );
+        }
+    }
+
+    /// Poisson counts with per-particle rates follow Poisson(λ) on each path: the
+    /// vectorised terms alone (λ = 0.7), the inversion continued one by one (λ = 4.5 and
+    /// 11: P(N ≥ 6) = 0.30 and 0.96), and `rand_distr`'s sampler (λ = 30); the rates
+    /// interleaved in one call, so that every block mixes the paths. Chi-square per rate
+    /// over 20 000 particles. A second round with `add` adds independent counts (λ doubles),
+    /// and the returned sum of rates is theirs.
+    #[test]
+    fn poisson_counts_follow_each_rate() {
+        let rates = [0.7, 4.5, 11.0, 30.0];
+        let n = 80_000;
+        let w: Vec<f64> = (0..n).map(|j| rates[j % 4]).collect();
+        let mut rng = stream_rng(16, 0);
+        let mut lanes = LaneRng::from_rng(&mut rng);
+        let mut counts = vec![0usize; n];
+        for (round, add) in [(1.0, false), (2.0, true)] {
+            let (total, rate_sum) = dispatch(Simd::Auto, || {
+                poisson_counts(&mut counts, &w, 1.0, add, &mut lanes, &mut rng)
+            });
+            let want: f64 = w.iter().sum();
+            assert!(
+                (rate_sum - want).abs() < 1e-9 * want,
+                "{rate_sum} against {want}"
+            );
+            if !add {
+                assert_eq!(total, counts.iter().sum::<usize>());
+            }
+            for (i, &rate) in rates.iter().enumerate() {
+                let mut hist = vec![0usize; 200];
+                for &c in counts.iter().skip(i).step_by(4) {
+                    hist[c] += 1;
+                }
+                let (chi2, df) = pearson_pooled(&hist, |k| poisson_pmf(round * rate, k));
+                assert!(
+                    chi2 < chi2_quantile_999(df),
+                    "λ = {}: χ² {chi2} on {df} df",
+                    round * rate
+                );
+            }
+        }
+    }
+
+    /// The inversion ends even for a uniform the rounded distribution function never
+    /// passes, near the tail's end rather than running on.
+    #[test]
+    fn inversion_stops_at_the_top_of_the_unit_interval() {
+        for lam in [0.5f64, 6.0, 12.0] {
+            // The state after the vectorised terms: p_5 and F_5.
+            let mut p = (-lam).exp();
+            let mut f = p;
+            for i in 1..TERMS {
+                p *= lam / i as f64;
+                f += p;
+            }
+            let k = poisson_rest(lam, 1.0 - f64::EPSILON / 2.0, p, f, &mut stream_rng(1, 0));
+            assert!(k >= TERMS && (k as f64) < lam + 40.0, "λ = {lam}: {k}");
+        }
+    }
+
+    /// The runs equal the draws written out one by one, the removed ones left out, after
+    /// each particle's base copies; with removals in most blocks and in none.
+    #[test]
+    fn runs_leave_out_exactly_the_removed_draws() {
+        let mut rng = stream_rng(17, 0);
+        for (n, per_draw) in [(300usize, 0.3), (1000, 0.01), (5, 0.5)] {
+            let counts: Vec<usize> = (0..n).map(|j| (j * 7 + 3) % 5).collect();
+            let base = |j: usize| j % 3;
+            let t: usize = counts.iter().sum();
+            let mut removed: Vec<usize> =
+                (0..t).filter(|_| rng.random::<f64>() < per_draw).collect();
+            let mut want = Vec::new();
+            let mut draw = 0;
+            for (j, &c) in counts.iter().enumerate() {
+                want.extend(std::iter::repeat_n(j, base(j)));
+                for _ in 0..c {
+                    if removed.binary_search(&draw).is_err() {
+                        want.push(j);
+                    }
+                    draw += 1;
+                }
+            }
+            removed.push(usize::MAX);
+            let mut out = vec![usize::MAX; want.len()];
+            write_runs(&counts, &removed, &base, &mut out);
+            assert_eq!(out, want, "N = {n}");
         }
     }
 }

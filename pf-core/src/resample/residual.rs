@@ -2,7 +2,7 @@
 //! particle by thinning a Poisson process.
 
 use super::Resample;
-use super::poisson::{Thresholds, distinct_sorted, thin, write_runs};
+use super::poisson::{OVERSHOOT, Thresholds, distinct_sorted, thin, write_runs};
 use crate::simd::math::floor_index;
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::Rng;
@@ -41,9 +41,6 @@ impl Resample for Residual {
         residual(Simd::Auto, w, rng, ancestors);
     }
 }
-
-/// Standard deviations of `T` by which the first round overshoots `R`.
-const OVERSHOOT: f64 = 3.0;
 
 /// Largest candidate rate of a round (the thresholds are built for rates up to 4).
 const MAX_RATE: f64 = 4.0;
