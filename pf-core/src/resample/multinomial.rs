@@ -1,7 +1,7 @@
 //! Multinomial resampling in O(N): Poisson offspring counts, conditioned on their total.
 
 use super::Resample;
-use super::poisson::{OVERSHOOT, distinct_sorted, poisson_counts, write_runs};
+use super::poisson::{distinct_sorted, poisson_counts, round_mean, write_runs};
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::Rng;
 use std::cell::RefCell;
@@ -12,12 +12,12 @@ use std::cell::RefCell;
 /// the uniforms in order; sorting them costs O(M log M). Instead each particle's number of
 /// draws is drawn directly:
 ///
-/// 1. **Poissonisation.** Particle `j` gets a Poisson(`Λ·M·W_j`) count, independent across
+/// 1. **Poissonisation.** Particle `j` gets a Poisson(`μ·W_j`) count, independent across
 ///    particles (see `poisson_counts`). These are the counts, per particle, of a Poisson
-///    process of rate `Λ·M` on [0, 1) cut at the cumulative weights: given their total `T`,
-///    they are the counts of `T` independent draws from the weights. `Λ = 1 + 3/√M`, so that
-///    `T` falls short of `M` with probability about 10⁻³; then further rounds add counts
-///    (independent Poisson counts add up to Poisson counts).
+///    process of rate `μ` on [0, 1) cut at the cumulative weights: given their total `T`,
+///    they are the counts of `T` independent draws from the weights. `μ = M + 3√M + 1`, so
+///    that `T` falls short of `M` with probability about 10⁻³; then further rounds add
+///    counts (independent Poisson counts add up to Poisson counts).
 /// 2. **Conditioning on `M`.** A uniformly chosen subset of `T − M` of the draws (about
 ///    `3√M`, from the caller's generator) is removed, which leaves `M` independent draws.
 /// 3. **Ancestors.** Each particle's draws are written as one run of copies, so the
@@ -55,7 +55,6 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
     if m == 0 || n == 0 {
         return;
     }
-    let mf = m as f64;
     let mut lanes = LaneRng::from_rng(rng);
     SCRATCH.with(|cell| {
         let (counts, removed) = &mut *cell.borrow_mut();
@@ -65,22 +64,22 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
             simd,
             #[inline(always)]
             || {
-                // Each round's counts have mean `rate·M` in all, for weights summing to 1;
-                // the first round's rates tell whether they do.
-                let mut rate = 1.0 + OVERSHOOT / mf.sqrt();
-                let (mut t, rates) = poisson_counts(counts, w, rate * mf, false, &mut lanes, rng);
-                let mass = rates / (rate * mf);
+                // The first round assumes weights summing to 1 and measures their mass; it
+                // is redone, normalised, when the mass is off by more than rounding.
+                let mean = round_mean(m);
+                let (mut t, rates) = poisson_counts(counts, w, mean, false, &mut lanes, rng);
+                let mass = rates / mean;
                 if !(mass > 0.0 && mass.is_finite()) {
                     out.fill(n - 1);
                     return;
                 }
                 if (mass - 1.0).abs() > 1e-6 {
-                    t = poisson_counts(counts, w, rate * mf / mass, false, &mut lanes, rng).0;
+                    let s = mean / mass;
+                    t = poisson_counts(counts, w, s, false, &mut lanes, rng).0;
                 }
                 while t < m {
-                    let d = (m - t) as f64;
-                    rate = (d + OVERSHOOT * d.sqrt() + 1.0) / mf;
-                    t += poisson_counts(counts, w, rate * mf / mass, true, &mut lanes, rng).0;
+                    let s = round_mean(m - t) / mass;
+                    t += poisson_counts(counts, w, s, true, &mut lanes, rng).0;
                 }
                 distinct_sorted(t, t - m, rng, removed);
                 write_runs(counts, removed, &|_| 0, out);

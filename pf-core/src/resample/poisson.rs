@@ -154,8 +154,16 @@ pub(crate) fn thin<R: Rng + ?Sized>(
     total
 }
 
-/// Standard deviations of a Poisson total by which the first round overshoots its target.
-pub(crate) const OVERSHOOT: f64 = 3.0;
+/// Standard deviations of a Poisson total by which a round overshoots its target.
+const OVERSHOOT: f64 = 3.0;
+
+/// The mean total of a round of Poisson counts that must bring `d` more draws: `d` plus
+/// [`OVERSHOOT`] standard deviations, so that it falls short about once in a thousand
+/// rounds, and the surplus to remove (about `3√d`) costs little.
+pub(crate) fn round_mean(d: usize) -> f64 {
+    let d = d as f64;
+    d + OVERSHOOT * d.sqrt() + 1.0
+}
 
 /// Rates above this are drawn by `rand_distr`'s exact sampler (its PTRS rejection, O(1)
 /// whatever the rate) instead of by inversion, whose length grows with the rate.

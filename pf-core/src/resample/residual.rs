@@ -2,7 +2,7 @@
 //! particle by thinning a Poisson process.
 
 use super::Resample;
-use super::poisson::{OVERSHOOT, Thresholds, distinct_sorted, thin, write_runs};
+use super::poisson::{Thresholds, distinct_sorted, round_mean, thin, write_runs};
 use crate::simd::math::floor_index;
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::Rng;
@@ -18,9 +18,9 @@ use std::cell::RefCell;
 ///
 /// 1. **Poissonisation by thinning.** Particle `j` gets a Poisson(`Λ`) number of
 ///    candidates, each kept with probability `r_j`: a Poisson(`Λ·r_j`) count, independent
-///    across particles. `Λ = 1 + 3/√R`, so that the total `T`, Poisson(`Λ·R`), falls short
-///    of `R` with probability about 10⁻³; then further rounds add counts (independent
-///    Poisson counts add up to Poisson counts).
+///    across particles. `Λ·R = R + 3√R + 1`, so that the total `T`, Poisson(`Λ·R`), falls
+///    short of `R` with probability about 10⁻³; then further rounds add counts
+///    (independent Poisson counts add up to Poisson counts).
 /// 2. **Conditioning on `R`.** Given `T`, the kept candidates are `T` independent draws from
 ///    `r/R`; a uniformly chosen subset of `T − R` of them (about `3√R`, from the caller's
 ///    generator) is removed, which leaves `R` independent draws.
@@ -122,7 +122,7 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
                     None => counts.fill(0),
                     Some(lanes) => {
                         // Each round's counts have mean `rate·R` in all.
-                        let mut rate = 1.0 + OVERSHOOT / rf.sqrt();
+                        let mut rate = (round_mean(r) / rf).min(MAX_RATE);
                         let mut add = false;
                         while t < r {
                             t += thin(counts, &Thresholds::new(rate), add, &keep, lanes, rng);
@@ -131,8 +131,7 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
                                 counts[n - 1] += extra;
                                 t += extra;
                             }
-                            let d = r.saturating_sub(t) as f64;
-                            rate = ((d + OVERSHOOT * d.sqrt() + 1.0) / rf).min(MAX_RATE);
+                            rate = (round_mean(r.saturating_sub(t)) / rf).min(MAX_RATE);
                             add = true;
                         }
                     }
