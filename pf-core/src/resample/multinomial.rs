@@ -82,7 +82,7 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
                     t += poisson_counts(counts, w, s, true, &mut lanes, rng).0;
                 }
                 distinct_sorted(t, t - m, rng, removed);
-                write_runs(counts, removed, &|_| 0, out);
+                write_runs::<8>(counts, removed, &|_| 0, out);
             },
         );
     });

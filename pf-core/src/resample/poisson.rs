@@ -294,17 +294,17 @@ fn poisson_rest<R: Rng + ?Sized>(lam: f64, u: f64, mut p: f64, mut f: f64, rng: 
 
 /// Particle `j`'s `base(j)` copies and kept draws (its count less the draws `removed`, an
 /// ascending list of indices among all the counted draws in particle order, then
-/// `usize::MAX`) as one run of copies of `j` in `out`. Boundaries are computed a block at a
+/// `usize::MAX`) as one run of copies of `j` in `out`, written `W` at a time (see [`Runs`]). Boundaries are computed a block at a
 /// time; a block that holds a removal (one in about every `√M/3` particles) also finds the
 /// particle of each removal.
 #[inline(always)]
-pub(crate) fn write_runs(
+pub(crate) fn write_runs<const W: usize>(
     counts: &[usize],
     removed: &[usize],
     base: &impl Fn(usize) -> usize,
     out: &mut [usize],
 ) {
-    let mut runs = Runs::new();
+    let mut runs = Runs::<W>::new();
     let (mut drawn, mut kept, mut x) = (0usize, 0usize, 0usize);
     let (mut kb, mut ends) = ([0usize; SCAN], [0usize; SCAN]);
     for (b, block) in counts.chunks(SCAN).enumerate() {
@@ -525,7 +525,10 @@ mod tests {
             }
             removed.push(usize::MAX);
             let mut out = vec![usize::MAX; want.len()];
-            write_runs(&counts, &removed, &base, &mut out);
+            write_runs::<4>(&counts, &removed, &base, &mut out);
+            let mut out8 = vec![usize::MAX; want.len()];
+            write_runs::<8>(&counts, &removed, &base, &mut out8);
+            assert_eq!(out8, want, "N = {n}");
             assert_eq!(out, want, "N = {n}");
         }
     }
