@@ -223,16 +223,19 @@ mod tests {
         }
     }
 
-    /// Weights outside the contract (NaN, infinite, negative, all zero) give ancestors in
+    /// Weights outside the contract (NaN, infinite, huge, negative, all zero) give ancestors in
     /// range from every scheme, with no panic (the filters reject such weights before they
     /// get here; a direct caller gets indices, not a crash).
     #[test]
     fn bad_weights_never_panic_and_stay_in_range() {
-        let cases: [&[f64]; 4] = [
+        let cases: [&[f64]; 7] = [
             &[0.2, f64::NAN, 0.3, f64::NAN, 0.5],
             &[0.2, f64::INFINITY, 0.3],
             &[0.6, -0.5, 0.9, -1e300],
             &[0.0, 0.0, 0.0],
+            &[1e300, 1e300, 1.0],
+            &[f64::MAX, 0.5, f64::MAX],
+            &[1e17, 1e17, 1e17],
         ];
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(8);
         for w in cases {

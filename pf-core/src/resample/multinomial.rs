@@ -96,9 +96,9 @@ mod tests {
 
     /// The joint law of the offspring counts of 3 particles from M = 4 draws is
     /// Multinomial(4; W): chi-square over all 15 outcomes from 60 000 seeded draws (the
-    /// conditioning step acts in almost every one, since T ~ Poisson(4·Λ), Λ = 2.5). With 14
-    /// degrees of freedom, P(χ² > 36.1) = 0.001. The same weights scaled by 7 (a sum far
-    /// from 1) give the same law: they are normalised.
+    /// conditioning step acts in almost every one, since T ~ Poisson(11)). With 14 degrees
+    /// of freedom, P(χ² > 36.1) = 0.001. The same weights scaled by 7 (a sum far from 1)
+    /// give the same law: they are normalised.
     #[test]
     fn offspring_counts_are_jointly_multinomial() {
         let w = [0.5, 0.3, 0.2];

@@ -77,9 +77,10 @@ impl<const W: usize> Runs<W> {
 
     /// Write `value` into `out[pos .. k]` (nothing when `k = pos`) and move to `k`. `W`
     /// copies go out with unconditional vector stores whatever the count; the next run
-    /// overwrites the surplus. Once `out` is full, further (ordered) runs write nothing, so callers check
-    /// [`is_full`](Self::is_full) once per block rather than after every run (a branch per
-    /// particle that cost systematic resampling 5–9 %, criterion at N = 10⁶, 2026-11-24).
+    /// overwrites the surplus. Once `out` is full, further (ordered) runs write nothing, so
+    /// callers check [`is_full`](Self::is_full) once per block rather than after every run
+    /// (a branch per particle that cost systematic resampling 5–9 %, criterion at N = 10⁶,
+    /// 2026-11-24).
     ///
     /// Boundaries never decrease (they count points below non-decreasing cumulative
     /// weights), so the next run starts at `k` itself: taking `max(pos, k)` instead put a

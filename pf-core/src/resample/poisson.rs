@@ -169,13 +169,16 @@ pub(crate) fn round_mean(d: usize) -> f64 {
 /// whatever the rate) instead of by inversion, whose length grows with the rate.
 const RATE_INVERT: f64 = 12.0;
 
+/// A cap on one count, far above any that resampling into memory can ask for.
+const MAX_COUNT: usize = 1 << 40;
+
 /// Terms of the distribution function compared in the vectorised pass; a count of `TERMS`
 /// means "`TERMS` or more" and is finished one term at a time.
 const TERMS: usize = 6;
 
 /// `counts[j] ←` (with `add`, `+=`) a Poisson(`λ_j`) count, `λ_j = scale·w_j` (0 where
 /// that is negative or NaN), independent across particles. Returns the sum of the new
-/// counts and the sum of the rates.
+/// counts (saturating) and the sum of the rates.
 ///
 /// Inversion: with one uniform `u` per particle (a lane step per 64 particles), the count
 /// is the first `i` with `u < F_i`, the distribution function summed term by term from
@@ -193,7 +196,7 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
     rng: &mut R,
 ) -> (usize, f64) {
     debug_assert_eq!(counts.len(), w.len());
-    let mut total = 0;
+    let mut total = 0usize;
     // Eight partial sums of the rates (a vectorisable reduction).
     let mut rates = [0.0f64; 8];
     let mut bits = [0u64; LANES];
@@ -218,7 +221,7 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
         for (c, &k) in block.iter_mut().zip(&k) {
             *c = if add { *c + k } else { k };
         }
-        total += k[..len].iter().sum::<usize>();
+        total = total.saturating_add(k[..len].iter().sum::<usize>());
     }
     (total, rates.iter().sum())
 }
@@ -276,8 +279,10 @@ fn poisson_block<R: Rng + ?Sized>(
 #[cold]
 fn poisson_rest<R: Rng + ?Sized>(lam: f64, u: f64, mut p: f64, mut f: f64, rng: &mut R) -> usize {
     if lam > RATE_INVERT {
-        // `as` saturates; a rate this large only comes from weights far outside the contract.
-        return Poisson::new(lam).map_or(0, |d| d.sample(rng) as usize);
+        // Weights far outside the contract can make rates of any size (the caller then
+        // normalises and draws again): the count is capped so that no sum of counts
+        // overflows.
+        return Poisson::new(lam).map_or(0, |d| (d.sample(rng) as usize).min(MAX_COUNT));
     }
     let mut i = TERMS;
     loop {
