@@ -135,7 +135,32 @@ mod tests {
         }
     }
 
-    /// With one heavy particle (its cumulative weight spans many cells) and two light ones,
+    /// Both kernels give the same ancestors, in order, on every path of the counts: skewed
+    /// weights over several lane steps (a few counts continued one by one), a dominant
+    /// weight (a rate above 12), weights far from normalised, and `M` below and above `N`.
+    #[test]
+    fn both_kernels_draw_the_same_ancestors() {
+        let skewed: Vec<f64> = (1..=300)
+            .map(|i| (((i * 37) % 11) as f64 + 0.3).powi(4))
+            .collect();
+        let dominant = [0.01, 0.97, 0.02];
+        let cases: [&[f64]; 3] = [&skewed, &dominant, &[3.0, 1.0, 2.0, 0.5]];
+        for w in cases {
+            for m in [1usize, 50, 300, 1000] {
+                for seed in 0..3 {
+                    let mut auto = vec![0; m];
+                    let mut portable = vec![0; m];
+                    multinomial_draws(Simd::Auto, w, &mut stream_rng(seed, 1), &mut auto);
+                    multinomial_draws(Simd::Portable, w, &mut stream_rng(seed, 1), &mut portable);
+                    assert_eq!(auto, portable, "N = {}, M = {m}, seed {seed}", w.len());
+                    assert!(auto.windows(2).all(|p| p[0] <= p[1]));
+                    assert!(auto.iter().all(|&a| a < w.len()));
+                }
+            }
+        }
+    }
+
+    /// With one heavy particle (a rate above 12, drawn by `rand_distr`) and two light ones,
     /// each particle's count is Binomial(M, W_j): chi-square per particle over 20 000 draws.
     #[test]
     fn marginals_are_binomial_when_one_weight_dominates() {
