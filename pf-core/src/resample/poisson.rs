@@ -4,7 +4,7 @@
 
 use super::offspring::{Runs, SCAN};
 use crate::simd::math::{exp_nonpositive_lanes, unit_from_bits};
-use crate::simd::{LANES, LaneRng};
+use crate::simd::{LANES, LaneRng, set_bits};
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, Poisson};
 
@@ -140,9 +140,7 @@ pub(crate) fn thin<R: Rng + ?Sized>(
             rest |= u64::from(cq == QUICK) << q;
         }
         rest &= u64::MAX >> (LANES - block.len());
-        while rest != 0 {
-            let q = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
+        for q in set_bits(rest) {
             let cq = th.count_from(v[q] >> 11, QUICK);
             k[q] = (0..cq).filter(|_| rng.random::<f64>() < p[q]).count();
         }
@@ -266,10 +264,8 @@ fn poisson_block<R: Rng + ?Sized>(
     for q in 0..LANES {
         rest |= u64::from((k[q] == TERMS) | (lam[q] > RATE_INVERT)) << q;
     }
-    while rest != 0 {
-        let q = rest.trailing_zeros() as usize;
+    for q in set_bits(rest) {
         k[q] = poisson_rest(lam[q], u[q], p[q], f[q], rng);
-        rest &= rest - 1;
     }
 }
 

@@ -26,6 +26,19 @@ pub enum Simd {
     Portable,
 }
 
+/// The positions of the set bits of `mask`, lowest first: the lanes a vectorised pass
+/// marked for scalar work.
+#[inline(always)]
+pub(crate) fn set_bits(mut mask: u64) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let p = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            p
+        })
+    })
+}
+
 /// Run `f`, compiled with AVX2 enabled when `simd` is [`Simd::Auto`] and the CPU has it.
 ///
 /// `f` should be an `#[inline(always)]` closure whose helpers are `#[inline(always)]` too, so
