@@ -103,6 +103,18 @@ impl<const W: usize> Runs<W> {
         self.pos = k;
     }
 
+    /// [`push`](Self::push) for a caller that knows `k + W ≤ out.len()`: `k ≤ M` needs no
+    /// clamp, and the `W` copies need no test for the end of `out`.
+    #[inline(always)]
+    pub(crate) fn push_fitting<T: Copy>(&mut self, out: &mut [T], value: T, k: usize) {
+        let pos = self.pos;
+        out[pos..pos + W].copy_from_slice(&[value; W]);
+        if k > pos + W {
+            out[pos + W..k].fill(value);
+        }
+        self.pos = k;
+    }
+
     /// Whether every one of the `m` outputs is written.
     #[inline(always)]
     pub(crate) fn is_full(&self, m: usize) -> bool {
@@ -114,8 +126,14 @@ impl<const W: usize> Runs<W> {
 /// particles get their cumulative weights ([`prefix4`]), then `boundaries(C, k)` turns the
 /// block's `C` into its boundaries `k` (a vectorisable loop for the arithmetic schemes),
 /// then the runs are written. The last particle's boundary is forced to `M`.
+///
+/// With `FIT`, a full block whose largest boundary leaves room for four more copies writes
+/// its runs with [`Runs::push_fitting`] (no clamp and no end test per run) in a loop whose
+/// length is the constant [`SCAN`]. Systematic resampling ran 7 % faster with it (the
+/// fastest of six interleaved runs of 3000 calls: 1.94 against 2.09 ns at N = 10⁴, 2.05
+/// against 2.21 at 10⁶, 2026-11-24); stratified ran 5.0 against 3.4 ns, so it goes without.
 #[inline(always)]
-pub(crate) fn walk<B>(w: &[f64], mut boundaries: B, out: &mut [usize])
+pub(crate) fn walk<const FIT: bool, B>(w: &[f64], mut boundaries: B, out: &mut [usize])
 where
     B: FnMut(&[f64], &mut [usize]),
 {
@@ -131,8 +149,17 @@ where
         if j0 + len == w.len() {
             kb[len - 1] = m;
         }
-        for (q, &k) in kb[..len].iter().enumerate() {
-            runs.push(out, j0 + q, k);
+        // The maximum, not the last boundary: bad weights (NaN, negative) can leave the
+        // boundaries out of order, or near `usize::MAX`.
+        let fits = || kb.iter().fold(0usize, |a, &k| a.max(k)).saturating_add(4) <= m;
+        if FIT && len == SCAN && fits() {
+            for (q, &k) in kb.iter().enumerate() {
+                runs.push_fitting(out, j0 + q, k);
+            }
+        } else {
+            for (q, &k) in kb[..len].iter().enumerate() {
+                runs.push(out, j0 + q, k);
+            }
         }
         if runs.is_full(m) {
             return;
@@ -143,14 +170,18 @@ where
 /// [`walk`] over the weights `w` on the chosen kernels, for the schemes whose boundaries
 /// need nothing but the cumulative weights (systematic and stratified).
 #[inline(always)]
-pub(crate) fn walk_weights<B>(simd: Simd, w: &[f64], boundaries: B, out: &mut [usize])
-where
+pub(crate) fn walk_weights<const FIT: bool, B>(
+    simd: Simd,
+    w: &[f64],
+    boundaries: B,
+    out: &mut [usize],
+) where
     B: FnMut(&[f64], &mut [usize]),
 {
     dispatch(
         simd,
         #[inline(always)]
-        || walk(w, boundaries, out),
+        || walk::<FIT, B>(w, boundaries, out),
     );
 }
 
@@ -205,6 +236,41 @@ mod tests {
         }
         check::<4>();
         check::<8>();
+    }
+
+    /// The fitting runs of `walk::<true, _>` write exactly what the checked runs write, for
+    /// systematic boundaries over good and bad weights (so over blocks in and out of order).
+    #[test]
+    fn fitting_runs_write_what_checked_runs_write() {
+        let skewed: Vec<f64> = (0..1000)
+            .map(|i| (((i * 37) % 101) as f64 / 101.0).powi(4))
+            .collect();
+        let bad: Vec<f64> = (0..500)
+            .map(|i| match i % 7 {
+                3 => f64::NAN,
+                5 => -0.5,
+                _ => 1.0,
+            })
+            .collect();
+        for w in [skewed, vec![1.0; 700], bad] {
+            let total: f64 = w.iter().filter(|x| **x > 0.0).sum();
+            let w: Vec<f64> = w.iter().map(|x| x / total).collect();
+            for m in [1usize, 3, 64, 68, 100, 500, 1000, 3000] {
+                for u in [0.0, 0.37, 0.999] {
+                    let mf = m as f64;
+                    let boundaries = |c: &[f64], k: &mut [usize]| {
+                        for (k, &c) in k.iter_mut().zip(c) {
+                            *k = crate::simd::math::ceil_index(mf * c - u);
+                        }
+                    };
+                    let (mut fit, mut checked) = (vec![usize::MAX; m], vec![usize::MAX; m]);
+                    walk::<true, _>(&w, boundaries, &mut fit);
+                    walk::<false, _>(&w, boundaries, &mut checked);
+                    assert_eq!(fit, checked, "N = {}, M = {m}, U = {u}", w.len());
+                    assert!(fit.iter().all(|&a| a < w.len()));
+                }
+            }
+        }
     }
 
     /// Boundaries out of order (what NaN weights can produce) still write every output.
