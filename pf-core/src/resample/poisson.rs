@@ -335,8 +335,10 @@ pub(crate) fn write_runs<const W: usize>(
             kept += *k;
             *k = kept;
         }
-        for (q, &k) in kb.iter().enumerate() {
-            runs.push(out, j0 + q, k);
+        let mut v = [j0; W];
+        for &k in kb.iter() {
+            runs.push(out, v, k);
+            v = v.map(|a| a + 1);
         }
         if runs.is_full(out.len()) {
             return;
