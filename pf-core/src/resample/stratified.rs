@@ -44,7 +44,7 @@ fn stratified_from_lanes(simd: Simd, w: &[f64], lanes: &mut LaneRng, ancestors: 
     // The previous particle's stratum and the raw bits of its U.
     let (mut prev_f, mut prev_v) = (usize::MAX, 0u64);
     let (mut f, mut t) = ([0usize; SCAN], [0.0f64; SCAN]);
-    walk_weights::<false, _>(
+    walk_weights(
         simd,
         w,
         #[inline(always)]

@@ -27,7 +27,7 @@ impl Resample for Systematic {
 /// Systematic resampling with a given `U ∈ [0, 1)`.
 pub(crate) fn systematic_from_uniform(simd: Simd, w: &[f64], u: f64, ancestors: &mut [usize]) {
     let mf = ancestors.len() as f64;
-    walk_weights::<true, _>(
+    walk_weights(
         simd,
         w,
         |c, k| {
