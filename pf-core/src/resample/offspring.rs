@@ -106,8 +106,9 @@ impl<const W: usize> Runs<W> {
         self.pos = k;
     }
 
-    /// [`push`](Self::push) for a caller that knows `k + W ≤ out.len()`: `k ≤ M` needs no
-    /// clamp, and the `W` copies need no test for the end of `out`.
+    /// [`push`](Self::push) for a caller that knows both the current position and `k` are
+    /// at most `out.len() − W`: `k` needs no clamp, and the `W` copies no test for the end
+    /// of `out`.
     #[inline(always)]
     pub(crate) fn push_fitting<T: Copy>(&mut self, out: &mut [T], value: [T; W], k: usize) {
         let pos = self.pos;
@@ -152,9 +153,10 @@ where
         if j0 + len == w.len() {
             kb[len - 1] = m;
         }
-        // The maximum, not the last boundary: bad weights (NaN, negative) can leave the
-        // boundaries out of order, or near `usize::MAX`.
-        let fits = || kb.iter().fold(0usize, |a, &k| a.max(k)).saturating_add(4) <= m;
+        // Every run of the block starts at or before the largest of its boundaries and of
+        // where the last block ended: bad weights (NaN, negative) can leave the boundaries
+        // out of order, within a block and across blocks, or near `usize::MAX`.
+        let fits = || kb.iter().fold(runs.pos, |a, &k| a.max(k)).saturating_add(4) <= m;
         if len == SCAN && fits() {
             let mut v = [j0; 4];
             for &k in &kb {
@@ -279,6 +281,37 @@ mod tests {
                     assert_eq!(walked, checked, "N = {}, M = {m}, U = {u}", w.len());
                     assert!(walked.iter().all(|&a| a < w.len()));
                 }
+            }
+        }
+    }
+
+    /// A block whose boundaries fall below where the previous block ended (bad weights)
+    /// neither writes past the end nor leaves an output unwritten, whatever the blocks'
+    /// boundaries.
+    #[test]
+    fn walk_survives_boundaries_out_of_order_across_blocks() {
+        let n = 3 * SCAN;
+        let w = vec![1.0 / n as f64; n];
+        for m in [5usize, 64, 130, 200, 260] {
+            for high in [
+                m.saturating_sub(1),
+                m.saturating_sub(2),
+                m.saturating_sub(4),
+                m / 2,
+            ] {
+                let mut block = 0;
+                let mut out = vec![usize::MAX; m];
+                walk(
+                    &w,
+                    |_, kb| {
+                        // Block 0 ends near M, block 1 drops to 0, block 2 climbs again.
+                        let k = [high, 0, 3][block];
+                        kb.fill(k);
+                        block += 1;
+                    },
+                    &mut out,
+                );
+                assert!(out.iter().all(|&a| a < n), "M = {m}, high {high}: {out:?}");
             }
         }
     }
