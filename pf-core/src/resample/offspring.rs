@@ -92,7 +92,7 @@ impl<const W: usize> Runs<W> {
     /// still starts where the previous one ended and the last ends at `M`, so every output
     /// is written and in range (tested).
     #[inline(always)]
-    pub(crate) fn push<T: Copy>(&mut self, out: &mut [T], value: [T; W], k: usize) {
+    fn push<T: Copy>(&mut self, out: &mut [T], value: [T; W], k: usize) {
         let m = out.len();
         let (pos, k) = (self.pos, k.min(m));
         if pos + W <= m {
@@ -110,13 +110,34 @@ impl<const W: usize> Runs<W> {
     /// at most `out.len() − W`: `k` needs no clamp, and the `W` copies no test for the end
     /// of `out`.
     #[inline(always)]
-    pub(crate) fn push_fitting<T: Copy>(&mut self, out: &mut [T], value: [T; W], k: usize) {
+    fn push_fitting<T: Copy>(&mut self, out: &mut [T], value: [T; W], k: usize) {
         let pos = self.pos;
         out[pos..pos + W].copy_from_slice(&value);
         if k > pos + W {
             out[pos + W..k].fill(value[0]);
         }
         self.pos = k;
+    }
+
+    /// One run per particle, for particles `j0, j0 + 1, …` with boundaries `ks`, their
+    /// copies advanced as a vector (see [`push`](Self::push)).
+    #[inline(always)]
+    pub(crate) fn push_each(&mut self, out: &mut [usize], j0: usize, ks: &[usize]) {
+        let mut v = [j0; W];
+        for &k in ks {
+            self.push(out, v, k);
+            v = v.map(|a| a + 1);
+        }
+    }
+
+    /// [`push_each`](Self::push_each) by [`push_fitting`](Self::push_fitting).
+    #[inline(always)]
+    fn push_each_fitting(&mut self, out: &mut [usize], j0: usize, ks: &[usize]) {
+        let mut v = [j0; W];
+        for &k in ks {
+            self.push_fitting(out, v, k);
+            v = v.map(|a| a + 1);
+        }
     }
 
     /// Whether every one of the `m` outputs is written.
@@ -158,17 +179,9 @@ where
         // out of order, within a block and across blocks, or near `usize::MAX`.
         let fits = || kb.iter().fold(runs.pos, |a, &k| a.max(k)).saturating_add(4) <= m;
         if len == SCAN && fits() {
-            let mut v = [j0; 4];
-            for &k in &kb {
-                runs.push_fitting(out, v, k);
-                v = v.map(|a| a + 1);
-            }
+            runs.push_each_fitting(out, j0, &kb);
         } else {
-            let mut v = [j0; 4];
-            for &k in &kb[..len] {
-                runs.push(out, v, k);
-                v = v.map(|a| a + 1);
-            }
+            runs.push_each(out, j0, &kb[..len]);
         }
         if runs.is_full(m) {
             return;

@@ -335,11 +335,7 @@ pub(crate) fn write_runs<const W: usize>(
             kept += *k;
             *k = kept;
         }
-        let mut v = [j0; W];
-        for &k in kb.iter() {
-            runs.push(out, v, k);
-            v = v.map(|a| a + 1);
-        }
+        runs.push_each(out, j0, kb);
         if runs.is_full(out.len()) {
             return;
         }
