@@ -113,6 +113,10 @@ pub struct BenchBootstrapArgs {
     /// Seed of the simulated data and of the filter's streams.
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub seed: u64,
+    /// Runs of the filter, each from the start with the same seed (so the same estimate):
+    /// `seconds` is the fastest, which is the least disturbed by other work on the machine.
+    #[arg(long, value_name = "R", default_value_t = 1)]
+    pub repeat: usize,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,

@@ -50,14 +50,18 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Bench(BenchCommand::Bootstrap(args)) => {
             let r = bench::bootstrap(&args)?;
             if args.json {
-                let json = serde_json::to_string(&r).map_err(|e| VizError::Argument {
-                    message: format!("cannot serialise the result: {e}"),
-                })?;
-                println!("{json}");
+                cmd::print_json(&r)?;
             } else {
                 println!(
-                    "bootstrap AR(1): N = {}, n = {}, {} thread(s): {:.3} s, {:.2} ns per particle-step, log-likelihood {:.3}",
-                    r.particles, r.steps, r.threads, r.seconds, r.ns_per_particle_step, r.loglik
+                    "bootstrap AR(1): N = {}, n = {}, {} thread(s): {:.3} s (fastest of {}; median {:.3} s), {:.2} ns per particle-step, log-likelihood {:.3}",
+                    r.particles,
+                    r.steps,
+                    r.threads,
+                    r.seconds,
+                    r.repeat,
+                    r.seconds_median,
+                    r.ns_per_particle_step,
+                    r.loglik
                 );
             }
             Ok(())

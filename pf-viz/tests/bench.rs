@@ -16,6 +16,47 @@ fn bad_bench_arguments_exit_non_zero_with_nothing_on_stdout() {
     assert!(o.stdout.is_empty(), "nothing on stdout on error");
     let o = pf_viz(&["bench", "bootstrap", "--threads", "0", "--json"]);
     assert!(!o.status.success());
+    let o = pf_viz(&["bench", "bootstrap", "--repeat", "0", "--json"]);
+    assert!(!o.status.success());
+    assert!(o.stdout.is_empty());
+}
+
+/// `--repeat R` times R runs of the same computation: the estimate is the single run's, bit
+/// for bit, and `seconds` is the fastest run, so at most the median.
+#[test]
+fn bench_bootstrap_repeat_reports_the_fastest_of_identical_runs() {
+    let run = |repeat: &str| {
+        let o = pf_viz_ok(&[
+            "bench",
+            "bootstrap",
+            "--particles",
+            "3000",
+            "--steps",
+            "40",
+            "--repeat",
+            repeat,
+            "--json",
+        ]);
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()
+    };
+    let (one, three) = (run("1"), run("3"));
+    assert_eq!(one["repeat"], 1);
+    assert_eq!(three["repeat"], 3);
+    assert_eq!(one["seconds"], one["seconds_median"]);
+    let (fastest, median) = (
+        three["seconds"].as_f64().unwrap(),
+        three["seconds_median"].as_f64().unwrap(),
+    );
+    assert!(
+        0.0 < fastest && fastest <= median,
+        "{fastest} against {median}"
+    );
+    let ns = three["ns_per_particle_step"].as_f64().unwrap();
+    assert!((ns - fastest * 1e9 / (3000.0 * 40.0)).abs() <= 1e-9 * ns);
+    assert_eq!(
+        one["loglik"].as_f64().unwrap().to_bits(),
+        three["loglik"].as_f64().unwrap().to_bits()
+    );
 }
 
 #[test]
