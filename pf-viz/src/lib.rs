@@ -52,16 +52,17 @@ pub fn run(cli: Cli) -> Result<()> {
             if args.json {
                 cmd::print_json(&r)?;
             } else {
+                let runs = if r.repeat > 1 {
+                    format!(
+                        " (fastest of {}; median {:.3} s)",
+                        r.repeat, r.seconds_median
+                    )
+                } else {
+                    String::new()
+                };
                 println!(
-                    "bootstrap AR(1): N = {}, n = {}, {} thread(s): {:.3} s (fastest of {}; median {:.3} s), {:.2} ns per particle-step, log-likelihood {:.3}",
-                    r.particles,
-                    r.steps,
-                    r.threads,
-                    r.seconds,
-                    r.repeat,
-                    r.seconds_median,
-                    r.ns_per_particle_step,
-                    r.loglik
+                    "bootstrap AR(1): N = {}, n = {}, {} thread(s): {:.3} s{runs}, {:.2} ns per particle-step, log-likelihood {:.3}",
+                    r.particles, r.steps, r.threads, r.seconds, r.ns_per_particle_step, r.loglik
                 );
             }
             Ok(())
