@@ -107,11 +107,16 @@ impl<const W: usize> Runs<W> {
     }
 
     /// [`push`](Self::push) for a caller that knows both the current position and `k` are
-    /// at most `out.len() − W`: `k` needs no clamp, and the `W` copies no test for the end
-    /// of `out`.
+    /// at most `out.len() − W`, and `out.len() < 2³²`: `k` needs no clamp, and the `W`
+    /// copies no test for the end of `out`.
     #[inline(always)]
     fn push_fitting<T: Copy>(&mut self, out: &mut [T], value: [T; W], k: usize) {
-        let pos = self.pos;
+        debug_assert!(u32::try_from(self.pos).is_ok());
+        // The position read as 32 bits (what it is, by the precondition) tells the compiler
+        // that `pos + W` cannot overflow, which drops one of the two bound checks per run:
+        // 7 % fewer instructions for systematic, 4 % for stratified (callgrind), and 2.96
+        // against 3.19 ns for stratified at N = 10⁴ (fastest of six runs of 2000 calls).
+        let pos = self.pos as u32 as usize;
         out[pos..pos + W].copy_from_slice(&value);
         if k > pos + W {
             out[pos + W..k].fill(value[0]);
@@ -152,9 +157,9 @@ impl<const W: usize> Runs<W> {
 /// block's `C` into its boundaries `k` (a vectorisable loop for the arithmetic schemes),
 /// then the runs are written. The last particle's boundary is forced to `M`.
 ///
-/// A full block whose largest boundary leaves room for four more copies writes its runs
-/// with [`Runs::push_fitting`] (no clamp and no end test per run) in a loop whose length is
-/// the constant [`SCAN`]: 4–7 % fewer instructions, and systematic resampling 7 % faster,
+/// A full block whose largest boundary leaves room for four more copies (when `M < 2³²`)
+/// writes its runs with [`Runs::push_fitting`] (no clamp and no end test per run) in a loop
+/// whose length is the constant [`SCAN`]: 4–7 % fewer instructions, and systematic resampling 7 % faster,
 /// stratified 5 % (the fastest of 5–6 interleaved runs of 2000–3000 calls at N = 10⁴ and
 /// 10⁶, 2026-11-24).
 #[inline(always)]
@@ -178,7 +183,7 @@ where
         // where the last block ended: bad weights (NaN, negative) can leave the boundaries
         // out of order, within a block and across blocks, or near `usize::MAX`.
         let fits = || kb.iter().fold(runs.pos, |a, &k| a.max(k)).saturating_add(4) <= m;
-        if len == SCAN && fits() {
+        if len == SCAN && m <= u32::MAX as usize && fits() {
             runs.push_each_fitting(out, j0, &kb);
         } else {
             runs.push_each(out, j0, &kb[..len]);
