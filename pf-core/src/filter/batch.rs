@@ -60,7 +60,7 @@ pub struct BatchConfig {
     pub resampler: Resampler,
     /// When to resample.
     pub policy: ResamplePolicy,
-    /// Particles per chunk: the unit of parallel work and of random streams.
+    /// Particles per chunk: the unit of parallel work and of random streams (below 2³²).
     pub chunk: usize,
     /// Seed of the chunk streams and of the resampling uniforms.
     pub seed: u64,
@@ -197,7 +197,7 @@ impl<M: ScalarModel> BatchBootstrap<M> {
     /// Allocate every buffer once.
     ///
     /// # Errors
-    /// `N = 0` or a chunk size of 0.
+    /// `N = 0`, or a chunk size of 0 or of 2³² or more.
     pub fn new(model: M, cfg: BatchConfig) -> Result<Self> {
         if cfg.n_particles == 0 {
             return Err(CoreError::InvalidParameter {
@@ -211,6 +211,13 @@ impl<M: ScalarModel> BatchBootstrap<M> {
                 name: "chunk",
                 value: 0.0,
                 reason: "the chunk size must be at least 1",
+            });
+        }
+        if u32::try_from(cfg.chunk).is_err() {
+            return Err(CoreError::InvalidParameter {
+                name: "chunk",
+                value: cfg.chunk as f64,
+                reason: "the chunk size must be below 2³² (a chunk's scratch is meant to stay in cache)",
             });
         }
         cfg.policy.validate()?;
@@ -680,6 +687,10 @@ fn systematic_gather<M>(ctx: &StepCtx<'_, M>, u: f64, lo: usize, len: usize, out
             // only write into the padding: the end is checked once per block. Boundaries
             // never decrease, so the next run starts at `k` (as in `Runs::push`).
             for (&k, &x) in kb[..m].iter().zip(&ctx.x_old[j..j + m]) {
+                // `pos ≤ len < 2³²` (the chunk size is checked): read as 32 bits, it tells
+                // the compiler that `pos + PAD` cannot overflow, which drops one of the two
+                // bound checks per particle (3 % fewer instructions, callgrind).
+                pos = pos as u32 as usize;
                 out[pos..pos + PAD].copy_from_slice(&[x; PAD]);
                 if k > pos + PAD {
                     out[pos + PAD..k].fill(x);
@@ -829,6 +840,16 @@ mod tests {
             )
             .is_err()
         );
+        assert!(matches!(
+            BatchBootstrap::new(
+                m,
+                BatchConfig {
+                    chunk: 1 << 32,
+                    ..BatchConfig::new(10, 0)
+                }
+            ),
+            Err(CoreError::InvalidParameter { name: "chunk", .. })
+        ));
         let mut f = BatchBootstrap::new(m, BatchConfig::new(10, 0)).unwrap();
         assert!(f.run(&[]).is_err());
         assert!(matches!(
