@@ -305,6 +305,21 @@ pub(crate) fn write_runs<const W: usize>(
     base: &impl Fn(usize) -> usize,
     out: &mut [usize],
 ) {
+    if u32::try_from(out.len()).is_ok() {
+        write_runs_with::<W, true>(counts, removed, base, out);
+    } else {
+        write_runs_with::<W, false>(counts, removed, base, out);
+    }
+}
+
+/// [`write_runs`], with `SMALL` when `M < 2³²` (see [`Runs`]).
+#[inline(always)]
+fn write_runs_with<const W: usize, const SMALL: bool>(
+    counts: &[usize],
+    removed: &[usize],
+    base: &impl Fn(usize) -> usize,
+    out: &mut [usize],
+) {
     let mut runs = Runs::<W>::new();
     let (mut drawn, mut kept, mut x) = (0usize, 0usize, 0usize);
     let (mut kb, mut ends) = ([0usize; SCAN], [0usize; SCAN]);
@@ -335,7 +350,7 @@ pub(crate) fn write_runs<const W: usize>(
             kept += *k;
             *k = kept;
         }
-        runs.push_each(out, j0, kb);
+        runs.push_each::<SMALL>(out, j0, kb);
         if runs.is_full(out.len()) {
             return;
         }
