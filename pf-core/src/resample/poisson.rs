@@ -105,7 +105,8 @@ pub(crate) fn thin<R: Rng + ?Sized>(
         for (q, p) in p[..block.len()].iter_mut().enumerate() {
             *p = keep(j0 + q);
         }
-        lanes.step2(&mut v, &mut u);
+        lanes.step(&mut v);
+        lanes.step(&mut u);
         let mut k = [0usize; LANES];
         let mut c = [0usize; LANES];
         for q in 0..LANES {

@@ -74,27 +74,20 @@ impl LaneRng {
     /// from step to step: returning a fresh array zero-filled it first, a quarter to half an
     /// instruction per draw (callgrind).
     #[inline(always)]
+    #[allow(clippy::manual_rotate)] // `rotate_left` was lowered to scalar `rol`s here
     pub(crate) fn step(&mut self, out: &mut [u64; LANES]) {
         let [s0, s1, s2, s3] = &mut self.s;
         for l in 0..LANES {
-            let mut x = [s0[l], s1[l], s2[l], s3[l]];
-            out[l] = xoshiro_next(&mut x);
-            [s0[l], s1[l], s2[l], s3[l]] = x;
-        }
-    }
-
-    /// Two lane steps, into `a` then `b`: the draws of two calls of [`step`](Self::step),
-    /// with the state loaded and stored once (2.5 % fewer instructions for residual
-    /// resampling, callgrind). In the normal sampler, pairs of steps cost the filter 18 %
-    /// more instructions (the loop stopped vectorising), so it steps one at a time.
-    #[inline(always)]
-    pub(crate) fn step2(&mut self, a: &mut [u64; LANES], b: &mut [u64; LANES]) {
-        let [s0, s1, s2, s3] = &mut self.s;
-        for l in 0..LANES {
-            let mut x = [s0[l], s1[l], s2[l], s3[l]];
-            a[l] = xoshiro_next(&mut x);
-            b[l] = xoshiro_next(&mut x);
-            [s0[l], s1[l], s2[l], s3[l]] = x;
+            // Rotations as shift pairs: LLVM keeps those in vector registers.
+            let sum = s0[l].wrapping_add(s3[l]);
+            out[l] = ((sum << 23) | (sum >> 41)).wrapping_add(s0[l]);
+            let t = s1[l] << 17;
+            s2[l] ^= s0[l];
+            s3[l] ^= s1[l];
+            s1[l] ^= s2[l];
+            s0[l] ^= s3[l];
+            s2[l] ^= t;
+            s3[l] = (s3[l] << 45) ^ (s3[l] >> 19);
         }
     }
 
@@ -200,25 +193,6 @@ impl LaneRng {
     }
 }
 
-/// xoshiro256++'s output and state update for one lane's state `x` (exactly `rand`'s
-/// `Xoshiro256PlusPlus::next_u64`, tested through the lanes).
-#[inline(always)]
-#[allow(clippy::manual_rotate)] // `rotate_left` was lowered to scalar `rol`s here
-fn xoshiro_next(x: &mut [u64; 4]) -> u64 {
-    let [s0, s1, s2, s3] = x;
-    // Rotations as shift pairs: LLVM keeps those in vector registers.
-    let sum = s0.wrapping_add(*s3);
-    let out = ((sum << 23) | (sum >> 41)).wrapping_add(*s0);
-    let t = *s1 << 17;
-    *s2 ^= *s0;
-    *s3 ^= *s1;
-    *s1 ^= *s2;
-    *s0 ^= *s3;
-    *s2 ^= t;
-    *s3 = (*s3 << 45) ^ (*s3 >> 19);
-    out
-}
-
 /// Layer index (low 10 bits) and uniform in [−1, 1) (top 52 bits) of a normal candidate.
 #[inline(always)]
 fn normal_parts(b: u64) -> (usize, f64) {
@@ -321,27 +295,6 @@ mod tests {
         lanes.fill_bits(&mut bits);
         for (p, &b) in bits.iter().enumerate() {
             assert_eq!(b, refs[p % LANES].next_u64(), "draw {p}");
-        }
-    }
-
-    /// Two steps at once draw what two single steps draw, and leave the same state, on both
-    /// kernels.
-    #[test]
-    fn a_double_step_is_two_steps() {
-        for simd in [Simd::Auto, Simd::Portable] {
-            let mut one = LaneRng::from_rng(&mut stream_rng(8, 2));
-            let mut two = one.clone();
-            let mut want = [[0u64; LANES]; 3];
-            let mut got = [[0u64; LANES]; 3];
-            dispatch(simd, || {
-                for w in &mut want {
-                    one.step(w);
-                }
-                let [a, b, c] = &mut got;
-                two.step2(a, b);
-                two.step(c);
-            });
-            assert_eq!(want, got, "{simd:?}");
         }
     }
 
