@@ -94,19 +94,28 @@ impl<const W: usize> Runs<W> {
     ///
     /// With `SMALL` (for `out.len() < 2³²`, so the position too) the position is read as 32
     /// bits, which tells the compiler that `pos + W` cannot overflow and drops one of the
-    /// bound checks per run: 2.5 % fewer instructions for multinomial and residual
-    /// (callgrind).
+    /// bound checks per run: 2.5 % fewer instructions for multinomial and residual, 7 % for
+    /// systematic and 4 % for stratified in their fitting blocks (callgrind).
+    ///
+    /// With `FIT` (only after [`fits`](Self::fits), which implies `SMALL`), `k` needs no
+    /// clamp and the `W` copies no test for the end of `out`.
     #[inline(always)]
-    fn push<T: Copy, const SMALL: bool>(&mut self, out: &mut [T], value: [T; W], k: usize) {
+    fn push<T: Copy, const SMALL: bool, const FIT: bool>(
+        &mut self,
+        out: &mut [T],
+        value: [T; W],
+        k: usize,
+    ) {
         let m = out.len();
         debug_assert!(!SMALL || u32::try_from(m).is_ok());
+        debug_assert!(!FIT || (SMALL && self.pos.max(k) + W <= m));
         let pos = if SMALL {
             self.pos as u32 as usize
         } else {
             self.pos
         };
-        let k = k.min(m);
-        if pos + W <= m {
+        let k = if FIT { k } else { k.min(m) };
+        if FIT || pos + W <= m {
             out[pos..pos + W].copy_from_slice(&value);
             if k > pos + W {
                 out[pos + W..k].fill(value[0]);
@@ -117,27 +126,10 @@ impl<const W: usize> Runs<W> {
         self.pos = k;
     }
 
-    /// [`push`](Self::push) for a caller that knows both the current position and `k` are
-    /// at most `out.len() − W`, and `out.len() < 2³²`: `k` needs no clamp, and the `W`
-    /// copies no test for the end of `out`.
-    #[inline(always)]
-    fn push_fitting<T: Copy>(&mut self, out: &mut [T], value: [T; W], k: usize) {
-        debug_assert!(u32::try_from(self.pos).is_ok());
-        // Read as 32 bits, as in `push::<_, true>`: 7 % fewer instructions for systematic,
-        // 4 % for stratified (callgrind), and 2.96 against 3.19 ns for stratified at
-        // N = 10⁴ (fastest of six runs of 2000 calls).
-        let pos = self.pos as u32 as usize;
-        out[pos..pos + W].copy_from_slice(&value);
-        if k > pos + W {
-            out[pos + W..k].fill(value[0]);
-        }
-        self.pos = k;
-    }
-
     /// One run per particle, for particles `j0, j0 + 1, …` with boundaries `ks`, their
-    /// copies advanced as a vector (see [`push`](Self::push), also for `SMALL`).
+    /// copies advanced as a vector (see [`push`](Self::push), also for `SMALL` and `FIT`).
     #[inline(always)]
-    pub(crate) fn push_each<const SMALL: bool>(
+    pub(crate) fn push_each<const SMALL: bool, const FIT: bool>(
         &mut self,
         out: &mut [usize],
         j0: usize,
@@ -145,19 +137,19 @@ impl<const W: usize> Runs<W> {
     ) {
         let mut v = [j0; W];
         for &k in ks {
-            self.push::<_, SMALL>(out, v, k);
+            self.push::<_, SMALL, FIT>(out, v, k);
             v = v.map(|a| a + 1);
         }
     }
 
-    /// [`push_each`](Self::push_each) by [`push_fitting`](Self::push_fitting).
+    /// Whether the runs of boundaries `ks` may all take `FIT`: `M < 2³²`, and the current
+    /// position and every boundary leave room for `W` copies. The maximum, not the last
+    /// boundary: bad weights (NaN, negative) can leave boundaries out of order, within a
+    /// block and across blocks, or near `usize::MAX`.
     #[inline(always)]
-    fn push_each_fitting(&mut self, out: &mut [usize], j0: usize, ks: &[usize]) {
-        let mut v = [j0; W];
-        for &k in ks {
-            self.push_fitting(out, v, k);
-            v = v.map(|a| a + 1);
-        }
+    pub(crate) fn fits(&self, ks: &[usize], m: usize) -> bool {
+        u32::try_from(m).is_ok()
+            && ks.iter().fold(self.pos, |a, &k| a.max(k)).saturating_add(W) <= m
     }
 
     /// Whether every one of the `m` outputs is written.
@@ -172,11 +164,10 @@ impl<const W: usize> Runs<W> {
 /// block's `C` into its boundaries `k` (a vectorisable loop for the arithmetic schemes),
 /// then the runs are written. The last particle's boundary is forced to `M`.
 ///
-/// A full block whose largest boundary leaves room for four more copies (when `M < 2³²`)
-/// writes its runs with [`Runs::push_fitting`] (no clamp and no end test per run) in a loop
-/// whose length is the constant [`SCAN`]: 4–7 % fewer instructions, and systematic resampling 7 % faster,
-/// stratified 5 % (the fastest of 5–6 interleaved runs of 2000–3000 calls at N = 10⁴ and
-/// 10⁶, 2026-11-24).
+/// A full block that [`Runs::fits`] writes its runs with no clamp and no end test per run,
+/// in a loop whose length is the constant [`SCAN`]: 4–7 % fewer instructions, and
+/// systematic resampling 7 % faster, stratified 5 % (the fastest of 5–6 interleaved runs of
+/// 2000–3000 calls at N = 10⁴ and 10⁶, 2026-11-24).
 #[inline(always)]
 pub(crate) fn walk<B>(w: &[f64], mut boundaries: B, out: &mut [usize])
 where
@@ -194,14 +185,10 @@ where
         if j0 + len == w.len() {
             kb[len - 1] = m;
         }
-        // Every run of the block starts at or before the largest of its boundaries and of
-        // where the last block ended: bad weights (NaN, negative) can leave the boundaries
-        // out of order, within a block and across blocks, or near `usize::MAX`.
-        let fits = || kb.iter().fold(runs.pos, |a, &k| a.max(k)).saturating_add(4) <= m;
-        if len == SCAN && m <= u32::MAX as usize && fits() {
-            runs.push_each_fitting(out, j0, &kb);
+        if len == SCAN && runs.fits(&kb, m) {
+            runs.push_each::<true, true>(out, j0, &kb);
         } else {
-            runs.push_each::<false>(out, j0, &kb[..len]);
+            runs.push_each::<false, false>(out, j0, &kb[..len]);
         }
         if runs.is_full(m) {
             return;
@@ -262,7 +249,7 @@ mod tests {
                 // Boundaries 0, 0, 3, 3, 7, … , capped at m.
                 let ks = [0usize, 0, 3, 3, 7, 8, 8, 11, 20];
                 for (j, &k) in ks.iter().enumerate() {
-                    runs.push::<_, SMALL>(&mut out, [j; W], k.min(m));
+                    runs.push::<_, SMALL, false>(&mut out, [j; W], k.min(m));
                 }
                 let full = runs.is_full(m);
                 let want: Vec<usize> = (0..m)
@@ -311,7 +298,7 @@ mod tests {
                     let mut runs = Runs::<4>::new();
                     for (j, &cj) in c.iter().enumerate() {
                         let kj = if j + 1 == c.len() { m } else { k(cj) };
-                        runs.push::<_, false>(&mut checked, [j; 4], kj);
+                        runs.push::<_, false, false>(&mut checked, [j; 4], kj);
                     }
                     assert_eq!(walked, checked, "N = {}, M = {m}, U = {u}", w.len());
                     assert!(walked.iter().all(|&a| a < w.len()));
@@ -359,7 +346,7 @@ mod tests {
                 let mut out = vec![usize::MAX; m];
                 let mut runs = Runs::<W>::new();
                 for (j, &k) in [5usize, 2, 9, 1, 0, 7, 30].iter().enumerate() {
-                    runs.push::<_, SMALL>(&mut out, [j; W], k);
+                    runs.push::<_, SMALL, false>(&mut out, [j; W], k);
                 }
                 assert!(out.iter().all(|&a| a < 7), "M = {m}, W = {W}: {out:?}");
             }

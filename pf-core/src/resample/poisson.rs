@@ -295,9 +295,9 @@ fn poisson_rest<R: Rng + ?Sized>(lam: f64, u: f64, mut p: f64, mut f: f64, rng: 
 
 /// Particle `j`'s `base(j)` copies and kept draws (its count less the draws `removed`, an
 /// ascending list of indices among all the counted draws in particle order, then
-/// `usize::MAX`) as one run of copies of `j` in `out`, written `W` at a time (see [`Runs`]). Boundaries are computed a block at a
-/// time; a block that holds a removal (one in about every `√M/3` particles) also finds the
-/// particle of each removal.
+/// `usize::MAX`) as one run of copies of `j` in `out`, written `W` at a time (see
+/// [`Runs`]). Boundaries are computed a block at a time; a block that holds a removal (one
+/// in about every `√M/3` particles) also finds the particle of each removal.
 #[inline(always)]
 pub(crate) fn write_runs<const W: usize>(
     counts: &[usize],
@@ -350,7 +350,7 @@ fn write_runs_with<const W: usize, const SMALL: bool>(
             kept += *k;
             *k = kept;
         }
-        runs.push_each::<SMALL>(out, j0, kb);
+        runs.push_each::<SMALL, false>(out, j0, kb);
         if runs.is_full(out.len()) {
             return;
         }
