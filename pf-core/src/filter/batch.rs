@@ -31,7 +31,7 @@ use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
 use crate::resample::{Resample, Resampler, SCAN, prefix4_each};
-use crate::simd::math::{ceil_index, exp_nonpositive, exp_nonpositive_lanes};
+use crate::simd::math::{ceil_index, ceil_index_in, exp_nonpositive, exp_nonpositive_lanes};
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::RngExt;
 use rayon::prelude::*;
@@ -666,6 +666,7 @@ fn systematic_gather<M>(ctx: &StepCtx<'_, M>, u: f64, lo: usize, len: usize, out
         }
     }
     let mut kb = [0usize; SCAN];
+    let (lo_f, hi_f) = (lo as f64, (lo + len) as f64);
     let mut pos = 0usize;
     let mut j = a;
     'walk: while j < n {
@@ -676,8 +677,7 @@ fn systematic_gather<M>(ctx: &StepCtx<'_, M>, u: f64, lo: usize, len: usize, out
             let m = (end - j).min(SCAN);
             // Boundaries relative to lo, capped at the chunk's end.
             for (k, &cw) in kb[..m].iter_mut().zip(&ctx.cw_old[j..j + m]) {
-                let kj = ceil_index((off + scale * cw) * ctx.n_over_total - u);
-                *k = kj.min(lo + len).saturating_sub(lo);
+                *k = ceil_index_in((off + scale * cw) * ctx.n_over_total - u, lo_f, hi_f);
             }
             if j + m == n {
                 // The last particle's boundary is N (the clamp).

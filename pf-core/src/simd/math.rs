@@ -82,6 +82,24 @@ pub(crate) fn ceil_index(x: f64) -> usize {
     ((t.to_bits().wrapping_sub(ROUND_MAGIC.to_bits()) as i64) + i64::from(r < x)) as usize
 }
 
+/// `⌈x⌉` clamped to `[lo, hi]`, minus `lo`, as an index, for integers `0 ≤ lo ≤ hi < 2⁵¹`
+/// and `x < 2⁵¹` (the same as `ceil_index(x).clamp(lo, hi) − lo` for `x > −1`): the clamp in
+/// two float compare-and-selects rather than unsigned 64-bit ones, which AVX2 lacks. In the
+/// batch filter's boundaries: 19 instead of 26 instructions per four particles, 61.1 instead
+/// of 62.7 per particle-step, and 1.7 % faster (fastest of ten interleaved runs at N = 10⁴,
+/// 5.46 against 5.55 ns; 7.09 against 7.27 at 10⁶; 2026-11-24).
+#[inline(always)]
+pub(crate) fn ceil_index_in(x: f64, lo: f64, hi: f64) -> usize {
+    let t = x + ROUND_MAGIC;
+    let r = t - ROUND_MAGIC;
+    let c = if r < x { r + 1.0 } else { r };
+    let c = if c < lo { lo } else { c };
+    let c = if c > hi { hi } else { c };
+    ((c - lo) + ROUND_MAGIC)
+        .to_bits()
+        .wrapping_sub(ROUND_MAGIC.to_bits()) as usize
+}
+
 /// `⌊x⌋` for `0 ≤ x < 2⁵¹`, as an index and as a double, vectorisable like [`ceil_index`].
 #[inline(always)]
 pub(crate) fn floor_index(x: f64) -> (usize, f64) {
@@ -161,6 +179,31 @@ mod tests {
         for i in 0..10_000 {
             let x = f64::from(i) * 0.37 - 0.9;
             assert_eq!(ceil_index(x), x.ceil().max(0.0) as usize, "ceil {x}");
+        }
+    }
+
+    /// The clamped ceiling is `ceil_index(x).clamp(lo, hi) − lo`: at integers, a rounding
+    /// step either side of them, below `lo`, above `hi` and near the range's ends.
+    #[test]
+    fn clamped_ceiling_matches_the_integer_clamp() {
+        for (lo, hi) in [
+            (0usize, 0usize),
+            (0, 7),
+            (5, 5),
+            (3, 2051),
+            (1 << 20, (1 << 20) + 64),
+        ] {
+            let (lof, hif) = (lo as f64, hi as f64);
+            let mut xs = vec![-0.999, -0.0, 0.0, 1e-300, 2.0 * hif + 3.0, 1e15];
+            let near_lo = lo.saturating_sub(3)..=(hi + 3).min(lo + 300);
+            for i in (0..5).chain(near_lo).chain(hi.saturating_sub(3)..=hi + 3) {
+                let k = i as f64;
+                xs.extend([k, k.next_up(), k.next_down(), k + 0.5]);
+            }
+            for x in xs {
+                let want = ceil_index(x).clamp(lo, hi) - lo;
+                assert_eq!(ceil_index_in(x, lof, hif), want, "x = {x}, [{lo}, {hi}]");
+            }
         }
     }
 
