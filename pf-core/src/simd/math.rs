@@ -86,8 +86,8 @@ pub(crate) fn ceil_index(x: f64) -> usize {
 /// and `x < 2⁵¹` (the same as `ceil_index(x).clamp(lo, hi) − lo` for `x > −1`): the clamp in
 /// two float compare-and-selects rather than unsigned 64-bit ones, which AVX2 lacks. In the
 /// batch filter's boundaries: 19 instead of 26 instructions per four particles, 61.1 instead
-/// of 62.7 per particle-step, and 1.7 % faster (fastest of ten interleaved runs at N = 10⁴,
-/// 5.46 against 5.55 ns; 7.09 against 7.27 at 10⁶; 2026-11-24).
+/// of 62.7 per particle-step, and 1.7 % faster (fastest of interleaved runs: 5.46 against
+/// 5.55 ns at N = 10⁴, 7.09 against 7.27 at 10⁶; 2026-11-24).
 #[inline(always)]
 pub(crate) fn ceil_index_in(x: f64, lo: f64, hi: f64) -> usize {
     let t = x + ROUND_MAGIC;
