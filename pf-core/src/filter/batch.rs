@@ -15,7 +15,10 @@
 //!    the chunk's cumulative weights.
 //!
 //! Steps 2–4 work on L1-resident scratch, compiled for AVX2 when the CPU has it
-//! ([`crate::simd`]). Afterwards, a pass over the chunk summaries (not the particles)
+//! ([`crate::simd`]). So a chunk touches main memory in bursts (its walk reads, its
+//! outputs' stores); from `N = 2¹⁸`, where the arrays outgrow the caches, it prefetches the
+//! next block of its walk and, during its `exp`, the next chunk's outputs, so that those
+//! bursts find their lines in cache. Afterwards, a pass over the chunk summaries (not the particles)
 //! reconciles the chunk maxima: chunk `d`'s weights are scaled by `exp(m_d − max)` and
 //! offset by the chunks before it, which gives the global cumulative weights, the
 //! likelihood increment and the ESS.
@@ -32,7 +35,7 @@ use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
 use crate::resample::{Resample, Resampler, SCAN, prefix4_each};
 use crate::simd::math::{ceil_index, ceil_index_in, exp_nonpositive, exp_nonpositive_lanes};
-use crate::simd::{LaneRng, Simd, dispatch};
+use crate::simd::{LaneRng, Simd, dispatch, prefetch};
 use rand::RngExt;
 use rayon::prelude::*;
 
@@ -170,6 +173,8 @@ pub struct BatchBootstrap<M> {
     total: f64,
     scratch: Vec<Scratch>,
     last: Option<StepReport>,
+    /// [`PREFETCH_MIN`]; the tests move it to run both paths.
+    prefetch_min: usize,
 }
 
 /// What every chunk of one step reads.
@@ -191,7 +196,18 @@ struct StepCtx<'a, M> {
     n_over_total: f64,
     ancestors: &'a [usize],
     keep_lw: bool,
+    /// Whether to prefetch (see [`PREFETCH_MIN`]), and the chunks per worker: a chunk
+    /// prefetches for the next one only within its own group.
+    prefetch: bool,
+    per_group: usize,
 }
+
+/// From this many particles (the four state and weight arrays then span 8 MiB or more) each
+/// chunk prefetches the memory the next chunk will use (see [`chunk_step`]). Below, the
+/// arrays stay in the caches and the prefetches only cost instructions: 3 % slower at
+/// N = 10⁵, against 5–8 % faster at 3·10⁵ and 12–15 % at 10⁶ and 10⁷ (fastest of
+/// interleaved runs, 2026-11-25).
+const PREFETCH_MIN: usize = 1 << 18;
 
 impl<M: ScalarModel> BatchBootstrap<M> {
     /// Allocate every buffer once.
@@ -242,6 +258,7 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             total: 0.0,
             scratch: vec![Scratch::new(cfg.chunk.min(n))],
             last: None,
+            prefetch_min: PREFETCH_MIN,
         };
         f.reset();
         Ok(f)
@@ -342,6 +359,8 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             n_over_total: n as f64 / self.total,
             ancestors: &self.ancestors,
             keep_lw: !matches!(self.cfg.policy, ResamplePolicy::Always),
+            prefetch: n >= self.prefetch_min,
+            per_group,
         };
         let simd = self.cfg.simd;
         type GroupWork<'a> = (
@@ -579,8 +598,24 @@ fn chunk_step<M: ScalarModel>(
     // time, then their cumulative sums (the resamplers' `prefix4`) with their squares
     // summed four lanes at a time on the way.
     let shift = if m == f64::NEG_INFINITY { 0.0 } else { m };
+    // The next chunk of this worker writes its outputs just after these: prefetched now, a
+    // block at a time, they arrive while this chunk computes instead of stalling its stores.
+    let next_len = if ctx.prefetch && !(d + 1).is_multiple_of(ctx.per_group) {
+        ctx.n.saturating_sub(lo + len).min(ctx.c)
+    } else {
+        0
+    };
     let mut blocks = l.chunks_exact_mut(EXP_LANES);
-    for b in &mut blocks {
+    for (i, b) in (&mut blocks).enumerate() {
+        let o = i * EXP_LANES;
+        if o < next_len {
+            let k = EXP_LANES.min(next_len - o);
+            prefetch(xs.as_ptr().wrapping_add(len + o), k);
+            prefetch(cws.as_ptr().wrapping_add(len + o), k);
+            if ctx.keep_lw {
+                prefetch(lws.as_ptr().wrapping_add(len + o), k);
+            }
+        }
         let v: [f64; EXP_LANES] = std::array::from_fn(|k| b[k] - shift);
         b.copy_from_slice(&exp_nonpositive_lanes(v));
     }
@@ -675,6 +710,12 @@ fn systematic_gather<M>(ctx: &StepCtx<'_, M>, u: f64, lo: usize, len: usize, out
         let (off, scale) = (ctx.offset[d], ctx.scale[d]);
         while j < end {
             let m = (end - j).min(SCAN);
+            if ctx.prefetch {
+                // The next block's previous states and weights, while this one is walked.
+                let (a, b) = ((j + m).min(n), (j + 2 * m).min(n));
+                prefetch(ctx.x_old[a..b].as_ptr(), b - a);
+                prefetch(ctx.cw_old[a..b].as_ptr(), b - a);
+            }
             // Boundaries relative to lo, capped at the chunk's end.
             for (k, &cw) in kb[..m].iter_mut().zip(&ctx.cw_old[j..j + m]) {
                 *k = ceil_index_in((off + scale * cw) * ctx.n_over_total - u, lo_f, hi_f);
@@ -761,6 +802,44 @@ mod tests {
         }
     }
 
+    /// Prefetching changes no result, for every scheme and policy, on one worker and on
+    /// two (where a chunk at its group's end does not prefetch for the next), with a last
+    /// chunk shorter than the others.
+    #[test]
+    fn prefetching_changes_nothing() {
+        let (m, mut ys) = setup();
+        ys[4] = None;
+        for resampler in Resampler::ALL {
+            for policy in [
+                ResamplePolicy::Always,
+                ResamplePolicy::EssBelow(EssThreshold::Fraction(0.5)),
+            ] {
+                let run = |prefetch_min, threads| {
+                    let cfg = BatchConfig {
+                        chunk: 64,
+                        resampler,
+                        policy,
+                        ..BatchConfig::new(1001, 9)
+                    };
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .unwrap();
+                    pool.install(|| {
+                        let mut f = BatchBootstrap::new(m, cfg).unwrap();
+                        f.prefetch_min = prefetch_min;
+                        let s = f.run(&ys).unwrap();
+                        let x: Vec<u64> = f.particles().iter().map(|v| v.to_bits()).collect();
+                        (s.log_lik.to_bits(), f.mean().to_bits(), x)
+                    })
+                };
+                let without = run(usize::MAX, 1);
+                assert_eq!(without, run(0, 1), "{resampler}, one worker");
+                assert_eq!(without, run(0, 2), "{resampler}, two workers");
+            }
+        }
+    }
+
     /// The chunk-local systematic resampler (bisection, boundaries, four-wide copies)
     /// draws exactly the ancestors of the textbook merge of the points `(i + U)/N` with the
     /// same global cumulative weights, whatever the chunk size.
@@ -794,6 +873,8 @@ mod tests {
                 n_over_total: n as f64 / f.total,
                 ancestors: &f.ancestors,
                 keep_lw: false,
+                prefetch: false,
+                per_group: 1,
             };
             // G_j N/T − U, from the global cumulative weights.
             let pos: Vec<f64> = (0..n)

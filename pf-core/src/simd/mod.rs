@@ -39,6 +39,36 @@ pub(crate) fn set_bits(mut mask: u64) -> impl Iterator<Item = usize> {
     })
 }
 
+/// Ask the CPU to bring the cache lines holding `len` values from `p` into its caches
+/// ahead of use. A hint: it reads no value into the program and never faults, whatever the
+/// address (so `p` may point past the caller's slice); on other architectures it does
+/// nothing.
+///
+/// The batch filter reads and writes its arrays in bursts, chunk by chunk, with L1-resident
+/// work in between; once they outgrow the caches, it uses this to overlap the next chunk's
+/// memory traffic with the current chunk's arithmetic (see `filter::batch`).
+#[inline(always)]
+pub(crate) fn prefetch<T>(p: *const T, len: usize) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let lines = (len * size_of::<T>()).div_ceil(64);
+        for i in 0..lines {
+            let line = p.cast::<i8>().wrapping_add(64 * i);
+            // The crate's second `unsafe` block. SAFETY: `_mm_prefetch` is `unsafe` only
+            // because it is declared for the `sse` target feature, which every x86-64 CPU
+            // has (it is part of the baseline). The instruction is a hint: it dereferences
+            // nothing the program sees and cannot fault on any address.
+            #[allow(unsafe_code)]
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T0>(line);
+            }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (p, len);
+}
+
 /// Run `f`, compiled with AVX2 enabled when `simd` is [`Simd::Auto`] and the CPU has it.
 ///
 /// `f` should be an `#[inline(always)]` closure whose helpers are `#[inline(always)]` too, so
@@ -61,7 +91,8 @@ mod avx2 {
         f()
     }
 
-    /// The crate's one `unsafe` block: call the AVX2 copy only on a CPU that has AVX2.
+    /// One of the crate's two `unsafe` blocks (the other is in [`prefetch`](super::prefetch)):
+    /// call the AVX2 copy only on a CPU that has AVX2.
     #[allow(unsafe_code)]
     #[inline]
     pub(super) fn run<R>(f: impl FnOnce() -> R) -> R {
