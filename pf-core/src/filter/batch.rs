@@ -607,24 +607,30 @@ fn chunk_step<M: ScalarModel>(
         0
     };
     let mut blocks = l.chunks_exact_mut(EXP_LANES);
-    for (i, b) in (&mut blocks).enumerate() {
-        let o = i * EXP_LANES;
-        if o < next_len {
-            let k = EXP_LANES.min(next_len - o);
-            prefetch(xs.as_ptr().wrapping_add(len + o), k);
-            prefetch(cws.as_ptr().wrapping_add(len + o), k);
-            if ctx.keep_lw {
-                prefetch(lws.as_ptr().wrapping_add(len + o), k);
-            }
-            if let Source::Identity = ctx.source {
-                // Without resampling, the next chunk reads these at its own indices.
-                let a = lo + len + o;
-                prefetch(ctx.x_old[a..a + k].as_ptr(), k);
-                prefetch(ctx.lw_old[a..a + k].as_ptr(), k);
-            }
+    if next_len == 0 {
+        // A loop of its own, so that the prefetches leave the in-cache case's code as it was.
+        for b in &mut blocks {
+            exp_block(b, shift);
         }
-        let v: [f64; EXP_LANES] = std::array::from_fn(|k| b[k] - shift);
-        b.copy_from_slice(&exp_nonpositive_lanes(v));
+    } else {
+        for (i, b) in (&mut blocks).enumerate() {
+            let o = i * EXP_LANES;
+            if o < next_len {
+                let k = EXP_LANES.min(next_len - o);
+                prefetch(xs.as_ptr().wrapping_add(len + o), k);
+                prefetch(cws.as_ptr().wrapping_add(len + o), k);
+                if ctx.keep_lw {
+                    prefetch(lws.as_ptr().wrapping_add(len + o), k);
+                }
+                if let Source::Identity = ctx.source {
+                    // Without resampling, the next chunk reads these at its own indices.
+                    let a = lo + len + o;
+                    prefetch(ctx.x_old[a..a + k].as_ptr(), k);
+                    prefetch(ctx.lw_old[a..a + k].as_ptr(), k);
+                }
+            }
+            exp_block(b, shift);
+        }
     }
     for v in blocks.into_remainder() {
         *v = exp_nonpositive(*v - shift);
@@ -641,6 +647,13 @@ fn chunk_step<M: ScalarModel>(
         sum,
         sum_sq: (sq4[0] + sq4[1]) + (sq4[2] + sq4[3]),
     }
+}
+
+/// `b[k] ← exp(b[k] − shift)` over one block of [`EXP_LANES`] weights.
+#[inline(always)]
+fn exp_block(b: &mut [f64], shift: f64) {
+    let v: [f64; EXP_LANES] = std::array::from_fn(|k| b[k] - shift);
+    b.copy_from_slice(&exp_nonpositive_lanes(v));
 }
 
 /// `x_i = f(x_old[a_i], z_i)`.
