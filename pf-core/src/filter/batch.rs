@@ -780,8 +780,10 @@ mod tests {
 
     use crate::models::NoisyAr1;
 
-    /// Bit-identical results on one thread, on a pool of one and of two threads, and with
-    /// the portable kernels instead of AVX2, for every scheme and for adaptive resampling.
+    /// Bit-identical results on one thread, on a pool of one and of two threads, with
+    /// the portable kernels instead of AVX2, and with the prefetches forced on (on one
+    /// worker and on two, where a chunk at its group's end prefetches nothing), for every
+    /// scheme and for adaptive resampling; the last chunk is shorter than the others.
     #[test]
     fn identical_for_any_thread_count_and_kernel() {
         let (m, mut ys) = setup();
@@ -791,7 +793,7 @@ mod tests {
                 ResamplePolicy::Always,
                 ResamplePolicy::EssBelow(EssThreshold::Fraction(0.5)),
             ] {
-                let run = |par, threads, simd| {
+                let run = |par, threads, simd, prefetch_min| {
                     let cfg = BatchConfig {
                         chunk: 64,
                         par,
@@ -806,56 +808,30 @@ mod tests {
                         .unwrap();
                     pool.install(|| {
                         let mut f = BatchBootstrap::new(m, cfg).unwrap();
+                        f.prefetch_min = prefetch_min;
                         let s = f.run(&ys).unwrap();
                         let ess: Vec<u64> = s.reports.iter().map(|r| r.ess.to_bits()).collect();
                         let x: Vec<u64> = f.particles().iter().map(|v| v.to_bits()).collect();
                         (s.log_lik.to_bits(), f.mean().to_bits(), ess, x)
                     })
                 };
-                let seq = run(Par::Seq, 1, Simd::Auto);
-                assert_eq!(seq, run(Par::Rayon, 1, Simd::Auto), "{resampler}");
-                assert_eq!(seq, run(Par::Rayon, 2, Simd::Auto), "{resampler}");
-                assert_eq!(seq, run(Par::Rayon, 3, Simd::Auto), "{resampler}");
-                assert_eq!(seq, run(Par::Seq, 1, Simd::Portable), "{resampler}");
-                assert_eq!(seq, run(Par::Rayon, 2, Simd::Portable), "{resampler}");
-            }
-        }
-    }
-
-    /// Prefetching changes no result, for every scheme and policy, on one worker and on
-    /// two (where a chunk at its group's end does not prefetch for the next), with a last
-    /// chunk shorter than the others.
-    #[test]
-    fn prefetching_changes_nothing() {
-        let (m, mut ys) = setup();
-        ys[4] = None;
-        for resampler in Resampler::ALL {
-            for policy in [
-                ResamplePolicy::Always,
-                ResamplePolicy::EssBelow(EssThreshold::Fraction(0.5)),
-            ] {
-                let run = |prefetch_min, threads| {
-                    let cfg = BatchConfig {
-                        chunk: 64,
-                        resampler,
-                        policy,
-                        ..BatchConfig::new(1001, 9)
-                    };
-                    let pool = rayon::ThreadPoolBuilder::new()
-                        .num_threads(threads)
-                        .build()
-                        .unwrap();
-                    pool.install(|| {
-                        let mut f = BatchBootstrap::new(m, cfg).unwrap();
-                        f.prefetch_min = prefetch_min;
-                        let s = f.run(&ys).unwrap();
-                        let x: Vec<u64> = f.particles().iter().map(|v| v.to_bits()).collect();
-                        (s.log_lik.to_bits(), f.mean().to_bits(), x)
-                    })
-                };
-                let without = run(usize::MAX, 1);
-                assert_eq!(without, run(0, 1), "{resampler}, one worker");
-                assert_eq!(without, run(0, 2), "{resampler}, two workers");
+                let off = PREFETCH_MIN;
+                let seq = run(Par::Seq, 1, Simd::Auto, off);
+                assert_eq!(seq, run(Par::Rayon, 1, Simd::Auto, off), "{resampler}");
+                assert_eq!(seq, run(Par::Rayon, 2, Simd::Auto, off), "{resampler}");
+                assert_eq!(seq, run(Par::Rayon, 3, Simd::Auto, off), "{resampler}");
+                assert_eq!(seq, run(Par::Seq, 1, Simd::Portable, off), "{resampler}");
+                assert_eq!(seq, run(Par::Rayon, 2, Simd::Portable, off), "{resampler}");
+                assert_eq!(
+                    seq,
+                    run(Par::Seq, 1, Simd::Auto, 0),
+                    "{resampler}, prefetching"
+                );
+                assert_eq!(
+                    seq,
+                    run(Par::Rayon, 2, Simd::Auto, 0),
+                    "{resampler}, prefetching"
+                );
             }
         }
     }
