@@ -18,8 +18,8 @@
 //! ([`crate::simd`]). So a chunk touches main memory in bursts (its walk reads, its
 //! outputs' stores); from `N = 2¹⁸`, where the arrays outgrow the caches, it prefetches the
 //! next block of its walk and, during its `exp`, the next chunk's outputs, so that those
-//! bursts find their lines in cache. Afterwards, a pass over the chunk summaries (not the particles)
-//! reconciles the chunk maxima: chunk `d`'s weights are scaled by `exp(m_d − max)` and
+//! bursts find their lines in cache. Afterwards, a pass over the chunk summaries (not the
+//! particles) reconciles the chunk maxima: chunk `d`'s weights are scaled by `exp(m_d − max)` and
 //! offset by the chunks before it, which gives the global cumulative weights, the
 //! likelihood increment and the ESS.
 //!
@@ -205,8 +205,8 @@ struct StepCtx<'a, M> {
 /// From this many particles (the four state and weight arrays then span 8 MiB or more) each
 /// chunk prefetches the memory the next chunk will use (see [`chunk_step`]). Below, the
 /// arrays stay in the caches and the prefetches only cost instructions: 3 % slower at
-/// N = 10⁵, against 5–8 % faster at 3·10⁵ and 12–15 % at 10⁶ and 10⁷ (fastest of
-/// interleaved runs, 2026-11-25).
+/// N = 10⁵, against 5–8 % faster at 3·10⁵ and 8–15 % at 10⁶ and 10⁷ (fastest of
+/// interleaved harness runs; 1–12 % in criterion A/Bs of a noisy night, 2026-11-25).
 const PREFETCH_MIN: usize = 1 << 18;
 
 impl<M: ScalarModel> BatchBootstrap<M> {

@@ -52,7 +52,13 @@ pub(crate) fn prefetch<T>(p: *const T, len: usize) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        let lines = (len * size_of::<T>()).div_ceil(64);
+        // Every line the values touch, the last one too when `p` starts mid-line.
+        let bytes = len * size_of::<T>();
+        let lines = if bytes == 0 {
+            0
+        } else {
+            (p.addr() % 64 + bytes).div_ceil(64)
+        };
         for i in 0..lines {
             let line = p.cast::<i8>().wrapping_add(64 * i);
             // The crate's second `unsafe` block. SAFETY: `_mm_prefetch` is `unsafe` only
