@@ -14,11 +14,15 @@ use serde::{Deserialize, Serialize};
 pub type PfRng = Xoshiro256PlusPlus;
 
 /// SplitMix64's output function (Steele, Lea & Flood 2014): a bijective 64-bit mixer.
-fn splitmix(mut z: u64) -> u64 {
+#[inline(always)]
+pub(crate) fn splitmix(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
     z ^ (z >> 31)
 }
+
+/// SplitMix64's increment, the odd integer closest to `2⁶⁴/φ`.
+pub(crate) const GAMMA: u64 = 0x9e37_79b9_7f4a_7c15;
 
 /// The stream of replication `r` under seed `seed`.
 ///
@@ -26,7 +30,6 @@ fn splitmix(mut z: u64) -> u64 {
 /// numbers, so nearby `(seed, r)` pairs give unrelated states. Seed 0 is a seed like any
 /// other.
 pub fn stream_rng(seed: u64, r: u64) -> PfRng {
-    const GAMMA: u64 = 0x9e37_79b9_7f4a_7c15;
     let mut state = splitmix(seed).wrapping_add(splitmix(r ^ 0x5851_f42d_4c95_7f2d));
     let mut bytes = [0u8; 32];
     for chunk in bytes.chunks_exact_mut(8) {

@@ -34,6 +34,9 @@ pub use stratified::Stratified;
 pub use systematic::Systematic;
 
 pub(crate) use offspring::{SCAN, prefix4_each};
+pub(crate) use stratified::stratified_index_in;
+#[cfg(test)]
+pub(crate) use stratified::stratum_uniform;
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};

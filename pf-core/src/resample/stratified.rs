@@ -22,7 +22,8 @@
 
 use super::Resample;
 use super::offspring::{SCAN, walk_weights};
-use crate::simd::math::{floor_index, unit_from_bits};
+use crate::mc::{GAMMA, splitmix};
+use crate::simd::math::{floor_index, index_in, unit_from_bits};
 use crate::simd::{LaneRng, Simd};
 use rand::Rng;
 
@@ -77,6 +78,32 @@ fn stratified_from_lanes(simd: Simd, w: &[f64], lanes: &mut LaneRng, ancestors: 
         },
         ancestors,
     );
+}
+
+/// `U_f = ⌊s_f/2¹²⌋·2⁻⁵²`, `s_f` the `f`-th output of the SplitMix64 stream seeded with `key`
+/// (`splitmix(key + (f + 1)·γ)`): the uniform of stratum `f` where the strata must be drawn
+/// in any order, by index (the batch filter's chunks, each walking its own ancestors).
+#[inline(always)]
+pub(crate) fn stratum_uniform(key: u64, f: u64) -> f64 {
+    unit_from_bits(splitmix(
+        key.wrapping_add(f.wrapping_add(1).wrapping_mul(GAMMA)),
+    ))
+}
+
+/// The boundary of a particle whose scaled cumulative weight is `x = M·C_j` (`0 ≤ x < 2⁵¹`)
+/// under stratified resampling with the uniforms [`stratum_uniform`]`(key, ·)`: with
+/// `f = ⌊x⌋`, `f + [U_f < x − f]`, clamped to `[lo, hi]` and less `lo` (as
+/// [`ceil_index_in`](crate::simd::math::ceil_index_in) does for systematic resampling).
+/// Vectorisable: AVX2 multiplies 64-bit lanes in three 32-bit steps.
+#[inline(always)]
+pub(crate) fn stratified_index_in(x: f64, key: u64, lo: f64, hi: f64) -> usize {
+    let (f, ff) = floor_index(x);
+    let k = if stratum_uniform(key, f as u64) < x - ff {
+        ff + 1.0
+    } else {
+        ff
+    };
+    index_in(k, lo, hi)
 }
 
 #[cfg(test)]

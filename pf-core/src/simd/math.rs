@@ -92,7 +92,13 @@ pub(crate) fn ceil_index(x: f64) -> usize {
 pub(crate) fn ceil_index_in(x: f64, lo: f64, hi: f64) -> usize {
     let t = x + ROUND_MAGIC;
     let r = t - ROUND_MAGIC;
-    let c = if r < x { r + 1.0 } else { r };
+    index_in(if r < x { r + 1.0 } else { r }, lo, hi)
+}
+
+/// The integer `c` (a double, `|c| < 2⁵¹`) clamped to `[lo, hi]`, minus `lo`, as an index
+/// (see [`ceil_index_in`]).
+#[inline(always)]
+pub(crate) fn index_in(c: f64, lo: f64, hi: f64) -> usize {
     let c = if c < lo { lo } else { c };
     let c = if c > hi { hi } else { c };
     ((c - lo) + ROUND_MAGIC)
