@@ -7,8 +7,8 @@
 //!
 //! 1. finds its ancestors (systematic and stratified resampling: it counts offspring
 //!    against the previous step's cumulative weights, so chunks need nothing from each
-//!    other; multinomial and residual resampling run on one thread before the pass and the
-//!    chunk reads their ancestors);
+//!    other; multinomial resampling runs before the pass in blocks of chunks side by side,
+//!    residual resampling on one thread, and the chunk reads their ancestors);
 //! 2. draws its standard normals from its own [`LaneRng`] (64 xoshiro256++ lanes and a
 //!    vectorised ziggurat);
 //! 3. gathers, propagates and weighs, and takes the chunk's maximum log-weight;
@@ -34,7 +34,10 @@
 use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
-use crate::resample::{Resample, Resampler, SCAN, prefix4_each, stratified_index_in};
+use crate::resample::{
+    BLOCK, ChunkSplit, ChunkedWeights, Resample, Resampler, SCAN, chunks_per_block, prefix4_each,
+    stratified_index_in,
+};
 use crate::simd::math::{ceil_index_in, exp_nonpositive, exp_nonpositive_lanes};
 use crate::simd::{LaneRng, Simd, dispatch, prefetch};
 use rand::RngExt;
@@ -60,7 +63,8 @@ pub struct BatchConfig {
     /// Number of particles `N`.
     pub n_particles: usize,
     /// Resampling scheme; systematic and stratified run chunk-parallel inside the step's
-    /// single pass, multinomial and residual on one thread before it.
+    /// single pass, multinomial in parallel blocks before it, residual on one thread before
+    /// it.
     pub resampler: Resampler,
     /// When to resample.
     pub policy: ResamplePolicy,
@@ -163,10 +167,13 @@ pub struct BatchBootstrap<M> {
     /// Cumulative weights within each chunk, relative to the chunk's maximum.
     cw: Vec<f64>,
     cw_new: Vec<f64>,
-    /// Ancestors from the schemes that run on one thread.
+    /// Ancestors from the schemes that resample before the pass (multinomial, residual).
     ancestors: Vec<usize>,
-    /// Normalised weights, for the schemes that run on one thread.
+    /// Normalised weights for residual resampling; the blocks' own weights for
+    /// multinomial.
     w_norm: Vec<f64>,
+    /// The multinomial split's scratch.
+    split: ChunkSplit,
     rngs: Vec<ChunkRng>,
     master: PfRng,
     stats: Vec<ChunkStat>,
@@ -179,6 +186,8 @@ pub struct BatchBootstrap<M> {
     last: Option<StepReport>,
     /// [`PREFETCH_MIN`]; the tests move it to run both paths.
     prefetch_min: usize,
+    /// [`BLOCK`]; the tests make it small to split the multinomial draws into blocks.
+    split_block: usize,
 }
 
 /// What every chunk of one step reads.
@@ -254,6 +263,7 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             cw_new: vec![0.0; n],
             ancestors: vec![0; n],
             w_norm: vec![0.0; n],
+            split: ChunkSplit::default(),
             rngs: Vec::with_capacity(chunks),
             master: stream_rng(cfg.seed, u64::MAX),
             stats: vec![ChunkStat::default(); chunks],
@@ -263,6 +273,7 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             scratch: vec![Scratch::new(cfg.chunk.min(n))],
             last: None,
             prefetch_min: PREFETCH_MIN,
+            split_block: BLOCK,
         };
         f.reset();
         Ok(f)
@@ -332,7 +343,11 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             match self.cfg.resampler {
                 Resampler::Systematic => Source::Systematic(self.master.random()),
                 Resampler::Stratified => Source::Stratified(self.master.random()),
-                Resampler::Multinomial | Resampler::Residual => {
+                Resampler::Multinomial => {
+                    self.multinomial_by_chunks();
+                    Source::Given
+                }
+                Resampler::Residual => {
                     self.resample_on_one_thread();
                     Source::Given
                 }
@@ -467,8 +482,27 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         Ok(report)
     }
 
-    /// Normalised weights of the current particles, then the configured scheme
-    /// (multinomial or residual) on one thread into `self.ancestors`.
+    /// Multinomial resampling into `self.ancestors`, blocks of [`BLOCK`] particles or more
+    /// drawing side by side (see [`ChunkSplit`]).
+    fn multinomial_by_chunks(&mut self) {
+        let w = ChunkedWeights {
+            cum: &self.cw,
+            chunk: self.cfg.chunk,
+            scale: &self.scale,
+        };
+        self.split.draw(
+            self.cfg.simd,
+            self.cfg.par,
+            w,
+            chunks_per_block(self.cfg.n_particles, self.cfg.chunk, self.split_block),
+            &mut self.master,
+            &mut self.w_norm,
+            &mut self.ancestors,
+        );
+    }
+
+    /// Normalised weights of the current particles, then the configured scheme (residual)
+    /// on one thread into `self.ancestors`.
     fn resample_on_one_thread(&mut self) {
         let c = self.cfg.chunk;
         let inv_total = 1.0 / self.total;
@@ -820,7 +854,8 @@ mod tests {
     /// Bit-identical results on one thread, on a pool of one and of two threads, with
     /// the portable kernels instead of AVX2, and with the prefetches forced on (on one
     /// worker and on two, where a chunk at its group's end prefetches nothing), for every
-    /// scheme and for adaptive resampling; the last chunk is shorter than the others.
+    /// scheme and for adaptive resampling; the last chunk is shorter than the others, and
+    /// the multinomial draws are split into four blocks.
     #[test]
     fn identical_for_any_thread_count_and_kernel() {
         let (m, mut ys) = setup();
@@ -846,6 +881,7 @@ mod tests {
                     pool.install(|| {
                         let mut f = BatchBootstrap::new(m, cfg).unwrap();
                         f.prefetch_min = prefetch_min;
+                        f.split_block = 200;
                         let s = f.run(&ys).unwrap();
                         let ess: Vec<u64> = s.reports.iter().map(|r| r.ess.to_bits()).collect();
                         let x: Vec<u64> = f.particles().iter().map(|v| v.to_bits()).collect();

@@ -21,6 +21,7 @@
 //! R. Douc, O. Cappé, E. Moulines, "Comparison of resampling schemes for particle
 //! filtering", ISPA 2005.
 
+mod chunked;
 mod multinomial;
 mod offspring;
 mod poisson;
@@ -33,6 +34,7 @@ pub use residual::Residual;
 pub use stratified::Stratified;
 pub use systematic::Systematic;
 
+pub(crate) use chunked::{BLOCK, ChunkSplit, ChunkedWeights, chunks_per_block};
 pub(crate) use offspring::{SCAN, prefix4_each};
 pub(crate) use stratified::stratified_index_in;
 #[cfg(test)]

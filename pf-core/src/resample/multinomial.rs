@@ -33,7 +33,7 @@ pub struct Multinomial;
 
 impl Resample for Multinomial {
     fn resample<R: Rng + ?Sized>(&self, w: &[f64], rng: &mut R, ancestors: &mut [usize]) {
-        multinomial_draws(Simd::Auto, w, rng, ancestors);
+        multinomial_draws(Simd::Auto, w, 0, rng, ancestors);
     }
 }
 
@@ -44,10 +44,12 @@ thread_local! {
 }
 
 /// `out` ← `M = out.len()` independent draws from the weights `w` (normalised here), in
-/// increasing order, in O(M + N): see [`Multinomial`].
+/// increasing order, in O(M + N): see [`Multinomial`]. Particle `j` is written as
+/// `first + j`.
 pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
     simd: Simd,
     w: &[f64],
+    first: usize,
     rng: &mut R,
     out: &mut [usize],
 ) {
@@ -70,7 +72,7 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
                 let (mut t, rates) = poisson_counts(counts, w, mean, false, &mut lanes, rng);
                 let mass = rates / mean;
                 if !(mass > 0.0 && mass.is_finite()) {
-                    out.fill(n - 1);
+                    out.fill(first + n - 1);
                     return;
                 }
                 if (mass - 1.0).abs() > 1e-6 {
@@ -82,7 +84,7 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
                     t += poisson_counts(counts, w, s, true, &mut lanes, rng).0;
                 }
                 distinct_sorted(t, t - m, rng, removed);
-                write_runs::<8>(counts, removed, &|_| 0, out);
+                write_runs::<8>(counts, removed, &|_| 0, first, out);
             },
         );
     });
@@ -110,7 +112,7 @@ mod tests {
             let mut rng = stream_rng(seed, 0);
             let mut out = [0usize; 4];
             for _ in 0..reps {
-                multinomial_draws(Simd::Auto, &scaled, &mut rng, &mut out);
+                multinomial_draws(Simd::Auto, &scaled, 0, &mut rng, &mut out);
                 assert!(out.windows(2).all(|p| p[0] <= p[1]), "in order: {out:?}");
                 let mut k = [0usize; 3];
                 for &a in &out {
@@ -150,8 +152,14 @@ mod tests {
                 for seed in 0..3 {
                     let mut auto = vec![0; m];
                     let mut portable = vec![0; m];
-                    multinomial_draws(Simd::Auto, w, &mut stream_rng(seed, 1), &mut auto);
-                    multinomial_draws(Simd::Portable, w, &mut stream_rng(seed, 1), &mut portable);
+                    multinomial_draws(Simd::Auto, w, 0, &mut stream_rng(seed, 1), &mut auto);
+                    multinomial_draws(
+                        Simd::Portable,
+                        w,
+                        0,
+                        &mut stream_rng(seed, 1),
+                        &mut portable,
+                    );
                     assert_eq!(auto, portable, "N = {}, M = {m}, seed {seed}", w.len());
                     assert!(auto.windows(2).all(|p| p[0] <= p[1]));
                     assert!(auto.iter().all(|&a| a < w.len()));
@@ -170,7 +178,7 @@ mod tests {
         let mut rng = stream_rng(12, 0);
         let mut out = vec![0usize; m];
         for _ in 0..20_000 {
-            multinomial_draws(Simd::Auto, &w, &mut rng, &mut out);
+            multinomial_draws(Simd::Auto, &w, 0, &mut rng, &mut out);
             let mut k = [0usize; 3];
             for &a in &out {
                 k[a] += 1;
@@ -193,7 +201,7 @@ mod tests {
     #[test]
     fn zero_weights_go_to_the_last_particle() {
         let mut out = vec![7usize; 10];
-        multinomial_draws(Simd::Auto, &[0.0; 3], &mut stream_rng(1, 0), &mut out);
+        multinomial_draws(Simd::Auto, &[0.0; 3], 0, &mut stream_rng(1, 0), &mut out);
         assert!(out.iter().all(|&a| a == 2));
     }
 }

@@ -295,7 +295,7 @@ fn poisson_rest<R: Rng + ?Sized>(lam: f64, u: f64, mut p: f64, mut f: f64, rng: 
 
 /// Particle `j`'s `base(j)` copies and kept draws (its count less the draws `removed`, an
 /// ascending list of indices among all the counted draws in particle order, then
-/// `usize::MAX`) as one run of copies of `j` in `out`, written `W` at a time (see
+/// `usize::MAX`) as one run of copies of `first + j` in `out`, written `W` at a time (see
 /// [`Runs`]). Boundaries are computed a block at a time; a block that holds a removal (one
 /// in about every `√M/3` particles) also finds the particle of each removal.
 #[inline(always)]
@@ -303,12 +303,13 @@ pub(crate) fn write_runs<const W: usize>(
     counts: &[usize],
     removed: &[usize],
     base: &impl Fn(usize) -> usize,
+    first: usize,
     out: &mut [usize],
 ) {
     if u32::try_from(out.len()).is_ok() {
-        write_runs_with::<W, true>(counts, removed, base, out);
+        write_runs_with::<W, true>(counts, removed, base, first, out);
     } else {
-        write_runs_with::<W, false>(counts, removed, base, out);
+        write_runs_with::<W, false>(counts, removed, base, first, out);
     }
 }
 
@@ -318,6 +319,7 @@ fn write_runs_with<const W: usize, const SMALL: bool>(
     counts: &[usize],
     removed: &[usize],
     base: &impl Fn(usize) -> usize,
+    first: usize,
     out: &mut [usize],
 ) {
     let mut runs = Runs::<W>::new();
@@ -350,7 +352,7 @@ fn write_runs_with<const W: usize, const SMALL: bool>(
             kept += *k;
             *k = kept;
         }
-        runs.push_each::<SMALL, false>(out, j0, kb);
+        runs.push_each::<SMALL, false>(out, first + j0, kb);
         if runs.is_full(out.len()) {
             return;
         }
@@ -539,9 +541,9 @@ mod tests {
             }
             removed.push(usize::MAX);
             let mut out = vec![usize::MAX; want.len()];
-            write_runs::<4>(&counts, &removed, &base, &mut out);
+            write_runs::<4>(&counts, &removed, &base, 0, &mut out);
             let mut out8 = vec![usize::MAX; want.len()];
-            write_runs::<8>(&counts, &removed, &base, &mut out8);
+            write_runs::<8>(&counts, &removed, &base, 0, &mut out8);
             assert_eq!(out8, want, "N = {n}");
             assert_eq!(out, want, "N = {n}");
         }

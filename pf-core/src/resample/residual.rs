@@ -137,7 +137,7 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
                     }
                 }
                 distinct_sorted(t, t - r, rng, removed);
-                write_runs::<4>(counts, removed, &floor, ancestors);
+                write_runs::<4>(counts, removed, &floor, 0, ancestors);
             },
         );
     });
