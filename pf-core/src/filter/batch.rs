@@ -504,20 +504,12 @@ impl<M: ScalarModel> BatchBootstrap<M> {
     /// Normalised weights of the current particles, then the configured scheme (residual)
     /// on one thread into `self.ancestors`.
     fn resample_on_one_thread(&mut self) {
-        let c = self.cfg.chunk;
-        let inv_total = 1.0 / self.total;
-        for ((w, cws), &scale) in self
-            .w_norm
-            .chunks_mut(c)
-            .zip(self.cw.chunks(c))
-            .zip(&self.scale)
-        {
-            let mut prev = 0.0;
-            for (w, &cw) in w.iter_mut().zip(cws) {
-                *w = scale * (cw - prev) * inv_total;
-                prev = cw;
-            }
-        }
+        let w = ChunkedWeights {
+            cum: &self.cw,
+            chunk: self.cfg.chunk,
+            scale: &self.scale,
+        };
+        w.write(0, self.stats.len(), 1.0 / self.total, &mut self.w_norm);
         self.cfg
             .resampler
             .resample(&self.w_norm, &mut self.master, &mut self.ancestors);

@@ -56,6 +56,22 @@ impl ChunkedWeights<'_> {
         let end = ((d + 1) * self.chunk).min(self.cum.len());
         self.scale[d] * self.cum[end - 1]
     }
+
+    /// The weights of chunks `d0 .. d1` times `factor`, from their cumulative sums, into
+    /// `out` (at least as long as those chunks).
+    pub(crate) fn write(&self, d0: usize, d1: usize, factor: f64, out: &mut [f64]) {
+        let c = self.chunk;
+        let (lo, hi) = (d0 * c, (d1 * c).min(self.cum.len()));
+        let chunks = out[..hi - lo].chunks_mut(c).zip(self.cum[lo..hi].chunks(c));
+        for (d, (w, cum)) in (d0..).zip(chunks) {
+            let s = self.scale[d] * factor;
+            let mut prev = 0.0;
+            for (w, &x) in w.iter_mut().zip(cum) {
+                *w = (x - prev) * s;
+                prev = x;
+            }
+        }
+    }
 }
 
 /// What every block reads.
@@ -180,19 +196,11 @@ fn draw_block(ctx: &Blocks<'_>, b: usize, w: &mut [f64], out: &mut [usize]) {
     if out.is_empty() {
         return;
     }
-    let c = ctx.w.chunk;
-    let lo = b * ctx.per_block * c;
-    let hi = ((b + 1) * ctx.per_block * c).min(ctx.w.cum.len());
+    let (c, d0) = (ctx.w.chunk, b * ctx.per_block);
+    let d1 = (d0 + ctx.per_block).min(ctx.w.cum.len().div_ceil(c));
+    let (lo, hi) = (d0 * c, (d1 * c).min(ctx.w.cum.len()));
     let w = &mut w[..hi - lo];
-    let inv = 1.0 / ctx.mass[b];
-    for (k, (w, cum)) in w.chunks_mut(c).zip(ctx.w.cum[lo..hi].chunks(c)).enumerate() {
-        let s = ctx.w.scale[lo / c + k] * inv;
-        let mut prev = 0.0;
-        for (w, &x) in w.iter_mut().zip(cum) {
-            *w = (x - prev) * s;
-            prev = x;
-        }
-    }
+    ctx.w.write(d0, d1, 1.0 / ctx.mass[b], w);
     multinomial_draws(ctx.simd, w, lo, &mut stream_rng(ctx.key, b as u64), out);
 }
 
