@@ -7,8 +7,8 @@
 //!
 //! 1. finds its ancestors (systematic and stratified resampling: it counts offspring
 //!    against the previous step's cumulative weights, so chunks need nothing from each
-//!    other; multinomial resampling runs before the pass in blocks of chunks side by side,
-//!    residual resampling on one thread, and the chunk reads their ancestors);
+//!    other; multinomial and residual resampling run before the pass, in blocks of chunks
+//!    side by side, and the chunk reads their ancestors);
 //! 2. draws its standard normals from its own [`LaneRng`] (64 xoshiro256++ lanes and a
 //!    vectorised ziggurat);
 //! 3. gathers, propagates and weighs, and takes the chunk's maximum log-weight;
@@ -35,7 +35,7 @@ use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
 use crate::resample::{
-    BLOCK, ChunkSplit, ChunkedWeights, Resample, Resampler, SCAN, chunks_per_block, prefix4_each,
+    BLOCK, Blocked, ChunkSplit, ChunkedWeights, Resampler, SCAN, chunks_per_block, prefix4_each,
     stratified_index_in,
 };
 use crate::simd::math::{ceil_index_in, exp_nonpositive, exp_nonpositive_lanes};
@@ -63,8 +63,7 @@ pub struct BatchConfig {
     /// Number of particles `N`.
     pub n_particles: usize,
     /// Resampling scheme; systematic and stratified run chunk-parallel inside the step's
-    /// single pass, multinomial in parallel blocks before it, residual on one thread before
-    /// it.
+    /// single pass, multinomial and residual in parallel blocks before it.
     pub resampler: Resampler,
     /// When to resample.
     pub policy: ResamplePolicy,
@@ -169,8 +168,8 @@ pub struct BatchBootstrap<M> {
     cw_new: Vec<f64>,
     /// Ancestors from the schemes that resample before the pass (multinomial, residual).
     ancestors: Vec<usize>,
-    /// Normalised weights for residual resampling; the blocks' own weights for
-    /// multinomial.
+    /// The blocks' weights, normalised globally (residual) or within the block
+    /// (multinomial).
     w_norm: Vec<f64>,
     /// The multinomial split's scratch.
     split: ChunkSplit,
@@ -344,11 +343,11 @@ impl<M: ScalarModel> BatchBootstrap<M> {
                 Resampler::Systematic => Source::Systematic(self.master.random()),
                 Resampler::Stratified => Source::Stratified(self.master.random()),
                 Resampler::Multinomial => {
-                    self.multinomial_by_chunks();
+                    self.resample_in_blocks(Blocked::Multinomial);
                     Source::Given
                 }
                 Resampler::Residual => {
-                    self.resample_on_one_thread();
+                    self.resample_in_blocks(Blocked::Residual);
                     Source::Given
                 }
             }
@@ -482,15 +481,16 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         Ok(report)
     }
 
-    /// Multinomial resampling into `self.ancestors`, blocks of [`BLOCK`] particles or more
-    /// drawing side by side (see [`ChunkSplit`]).
-    fn multinomial_by_chunks(&mut self) {
+    /// Multinomial or residual resampling into `self.ancestors`, blocks of [`BLOCK`]
+    /// particles or more drawing side by side (see [`ChunkSplit`]).
+    fn resample_in_blocks(&mut self, scheme: Blocked) {
         let w = ChunkedWeights {
             cum: &self.cw,
             chunk: self.cfg.chunk,
             scale: &self.scale,
         };
         self.split.draw(
+            scheme,
             self.cfg.simd,
             self.cfg.par,
             w,
@@ -499,20 +499,6 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             &mut self.w_norm,
             &mut self.ancestors,
         );
-    }
-
-    /// Normalised weights of the current particles, then the configured scheme (residual)
-    /// on one thread into `self.ancestors`.
-    fn resample_on_one_thread(&mut self) {
-        let w = ChunkedWeights {
-            cum: &self.cw,
-            chunk: self.cfg.chunk,
-            scale: &self.scale,
-        };
-        w.write(0, self.stats.len(), 1.0 / self.total, &mut self.w_norm);
-        self.cfg
-            .resampler
-            .resample(&self.w_norm, &mut self.master, &mut self.ancestors);
     }
 
     /// Filter `y_0, …, y_n` from the start.

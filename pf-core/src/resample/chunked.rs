@@ -1,5 +1,5 @@
-//! Multinomial resampling split over blocks of particles, so that the blocks draw in
-//! parallel: the batch filter's multinomial scheme.
+//! Multinomial and residual resampling split over blocks of particles, so that the blocks
+//! draw in parallel: the batch filter's two schemes that resample before its pass.
 //!
 //! `M` independent draws from weights `W` fall into the blocks as a Multinomial(`M`; block
 //! masses) split, and given that split the draws of each block are independent draws from
@@ -10,6 +10,12 @@
 //! multinomial (tested by chi-square), and the result depends on the blocks, not on the
 //! threads that run them.
 //!
+//! Residual resampling splits the same way: its floors `⌊M·W_j⌋` are fixed, and its
+//! `R = M − Σ⌊M·W_j⌋` multinomial draws from the residuals `r_j/R` split over the blocks by
+//! their residual masses `Σ_{j∈b} r_j`; each block writes its floors and draws its share from
+//! `r_j/Σ_{j∈b} r_j` ([`residual_draws`]). The blocks' floors and residual masses take a
+//! first parallel pass.
+//!
 //! Blocks are whole chunks of the batch filter, as few and as large as parallel work allows
 //! (see [`chunks_per_block`]): each block's Poisson counts overshoot its `M_b` by about
 //! `3√M_b` draws, which it then draws uniformly and removes, so small blocks cost more on
@@ -19,10 +25,21 @@
 //! interleaved rounds, scratch harness, 2026-11-25).
 
 use super::multinomial::multinomial_draws;
+use super::residual::{floors_and_residual_mass, residual_draws};
 use crate::mc::{Par, stream_rng};
 use crate::simd::Simd;
 use rand::{Rng, RngExt};
 use rand_distr::{Binomial, Distribution};
+use rayon::prelude::*;
+
+/// The schemes that draw in blocks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Blocked {
+    /// Independent draws from `W`.
+    Multinomial,
+    /// `⌊M·W_j⌋` copies plus independent draws from the residuals.
+    Residual,
+}
 
 /// Particles per block, at least: from `N = 2·BLOCK` the draws run on two threads or more.
 pub(crate) const BLOCK: usize = 1 << 14;
@@ -76,6 +93,7 @@ impl ChunkedWeights<'_> {
 
 /// What every block reads.
 struct Blocks<'a> {
+    scheme: Blocked,
     simd: Simd,
     par: Par,
     w: ChunkedWeights<'a>,
@@ -83,10 +101,14 @@ struct Blocks<'a> {
     per_block: usize,
     /// `starts[b]`: where block `b`'s draws begin in the output.
     starts: &'a [usize],
-    /// Block `b`'s mass.
+    /// Block `b`'s mass (multinomial) or residual mass (residual).
     mass: &'a [f64],
+    /// Block `b`'s floors (residual).
+    fixed: &'a [usize],
     /// The key of the blocks' streams: block `b` draws from `stream_rng(key, b)`.
     key: u64,
+    /// `M`.
+    m: usize,
 }
 
 /// The split's scratch, kept by the caller so that a step allocates nothing.
@@ -94,17 +116,20 @@ struct Blocks<'a> {
 pub(crate) struct ChunkSplit {
     starts: Vec<usize>,
     mass: Vec<f64>,
+    /// Each block's outputs fixed before the split (residual's floors).
+    fixed: Vec<usize>,
     /// The mass of blocks `b, b + 1, …`.
     rest: Vec<f64>,
 }
 
 impl ChunkSplit {
-    /// `out` ← `M = out.len()` independent draws from the weights `w`, in blocks of
+    /// `out` ← `M = out.len()` ancestors from the weights `w` under `scheme`, in blocks of
     /// `per_block` chunks. `scratch` is as long as `w.cum`; `rng` draws the split and the
     /// blocks' key.
     #[allow(clippy::too_many_arguments)] // each is one of the draw's inputs
     pub(crate) fn draw<R: Rng + ?Sized>(
         &mut self,
+        scheme: Blocked,
         simd: Simd,
         par: Par,
         w: ChunkedWeights<'_>,
@@ -124,6 +149,38 @@ impl ChunkSplit {
             let end = ((b + 1) * per_block).min(chunks);
             (b * per_block..end).map(|d| w.mass(d)).sum::<f64>()
         }));
+        self.fixed.clear();
+        self.fixed.resize(blocks, 0);
+        if scheme == Blocked::Residual {
+            // The weights normalised into `scratch` (where the blocks draw from them), and
+            // each block's floors and residual mass, block by block side by side.
+            let (inv, mf, len) = (
+                1.0 / self.mass.iter().sum::<f64>(),
+                m as f64,
+                per_block * w.chunk,
+            );
+            let block =
+                |(b, (ws, (fixed, mass))): (usize, (&mut [f64], (&mut usize, &mut f64)))| {
+                    let d0 = b * per_block;
+                    w.write(d0, (d0 + per_block).min(chunks), inv, ws);
+                    (*fixed, *mass) = floors_and_residual_mass(simd, ws, mf);
+                };
+            let scratch = &mut scratch[..w.cum.len()];
+            match par {
+                Par::Seq => scratch
+                    .chunks_mut(len)
+                    .zip(self.fixed.iter_mut().zip(self.mass.iter_mut()))
+                    .enumerate()
+                    .for_each(block),
+                Par::Rayon => scratch
+                    .par_chunks_mut(len)
+                    .zip(self.fixed.par_iter_mut().zip(self.mass.par_iter_mut()))
+                    .enumerate()
+                    .for_each(block),
+            }
+        }
+        // The draws beyond the fixed outputs (all of them for multinomial).
+        let fixed: usize = self.fixed.iter().sum();
         // Summed from the end, `rest[b] ≥ mass[b]` exactly, and the last block with mass
         // has `rest[b] = mass[b]`: it takes every draw left, and no draw reaches a block
         // without mass.
@@ -135,7 +192,7 @@ impl ChunkSplit {
         self.starts.clear();
         self.starts.resize(blocks + 1, 0);
         let key = rng.random();
-        let mut left = m;
+        let mut left = m.saturating_sub(fixed);
         for b in 0..blocks {
             let p = if self.rest[b] > 0.0 {
                 (self.mass[b] / self.rest[b]).min(1.0)
@@ -147,20 +204,25 @@ impl ChunkSplit {
             } else {
                 Binomial::new(left as u64, p).map_or(0, |d| d.sample(rng) as usize)
             };
-            self.starts[b + 1] = self.starts[b] + k;
+            // Capped at M: floors summing past it (weights past 1 beyond rounding) only
+            // shorten the last blocks, whose runs then stop at the end of `out`.
+            self.starts[b + 1] = (self.starts[b] + self.fixed[b] + k).min(m);
             left -= k;
         }
         // Weights with no mass at all (outside the contract) leave draws over: the last
         // block takes them, as the cumulative-weight schemes give them the last particle.
-        self.starts[blocks] += left;
+        self.starts[blocks] = m;
         let ctx = Blocks {
+            scheme,
             simd,
             par,
             w,
             per_block,
             starts: &self.starts,
             mass: &self.mass,
+            fixed: &self.fixed,
             key,
+            m,
         };
         split(&ctx, 0, blocks, scratch, out);
     }
@@ -190,8 +252,9 @@ fn split(ctx: &Blocks<'_>, b0: usize, b1: usize, w: &mut [f64], out: &mut [usize
     }
 }
 
-/// Block `b`'s draws: its weights normalised from the chunks' cumulative sums, then
-/// [`multinomial_draws`] on its own stream, written as global indices.
+/// Block `b`'s draws on its own stream, written as global indices: for multinomial, its
+/// weights normalised from the chunks' cumulative sums, then [`multinomial_draws`]; for
+/// residual, [`residual_draws`] on the weights the first pass left in `w`.
 fn draw_block(ctx: &Blocks<'_>, b: usize, w: &mut [f64], out: &mut [usize]) {
     if out.is_empty() {
         return;
@@ -200,8 +263,17 @@ fn draw_block(ctx: &Blocks<'_>, b: usize, w: &mut [f64], out: &mut [usize]) {
     let d1 = (d0 + ctx.per_block).min(ctx.w.cum.len().div_ceil(c));
     let (lo, hi) = (d0 * c, (d1 * c).min(ctx.w.cum.len()));
     let w = &mut w[..hi - lo];
-    ctx.w.write(d0, d1, 1.0 / ctx.mass[b], w);
-    multinomial_draws(ctx.simd, w, lo, &mut stream_rng(ctx.key, b as u64), out);
+    let rng = &mut stream_rng(ctx.key, b as u64);
+    match ctx.scheme {
+        Blocked::Multinomial => {
+            ctx.w.write(d0, d1, 1.0 / ctx.mass[b], w);
+            multinomial_draws(ctx.simd, w, lo, rng, out);
+        }
+        Blocked::Residual => {
+            let sums = Some((ctx.fixed[b], ctx.mass[b]));
+            residual_draws(ctx.simd, w, ctx.m as f64, sums, lo, rng, out);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -224,22 +296,25 @@ mod tests {
         cum
     }
 
-    /// Five particles in chunks of two (so three chunks, the last a single particle), each
-    /// chunk's sums on a scale of its own, in blocks of one chunk and of two, and M = 4
-    /// draws: the offspring counts are jointly Multinomial(4; W) over all 70 outcomes,
-    /// chi-square over 40 000 seeded calls, on one thread and on the pool alike.
-    #[test]
-    fn offspring_counts_are_jointly_multinomial() {
-        let w = [0.1, 0.25, 0.3, 0.05, 0.3];
+    /// Chi-square of the offspring counts of `reps` seeded calls under `scheme` over five
+    /// particles with weights `w` in chunks of two (so three chunks, the last a single
+    /// particle), each chunk's sums on a scale of its own, in blocks of one chunk and of
+    /// two, against the probabilities `p` of every composition of `m` into five counts (all
+    /// of them listed by `p`'s keys). The pool's draws equal one thread's.
+    fn chi_square_in_blocks(
+        scheme: Blocked,
+        w: &[f64; 5],
+        m: usize,
+        p: &HashMap<Vec<usize>, f64>,
+        reps: usize,
+    ) {
         let scale = [1.0, 1e-3, 7.0];
-        let cum = chunked(&w, 2, &scale);
+        let cum = chunked(w, 2, &scale);
         let weights = ChunkedWeights {
             cum: &cum,
             chunk: 2,
             scale: &scale,
         };
-        let m = 4;
-        let reps = 40_000;
         for per_block in [1, 2] {
             let mut seen: HashMap<Vec<usize>, usize> = HashMap::new();
             let mut split = ChunkSplit::default();
@@ -248,9 +323,10 @@ mod tests {
             let (mut out, mut pooled) = (vec![0usize; m], vec![0usize; m]);
             for _ in 0..reps {
                 let mut again = rng.clone();
-                let (simd, b) = (Simd::Auto, per_block);
+                let (s, b) = (Simd::Auto, per_block);
                 split.draw(
-                    simd,
+                    scheme,
+                    s,
                     Par::Rayon,
                     weights,
                     b,
@@ -258,33 +334,87 @@ mod tests {
                     &mut scratch,
                     &mut pooled,
                 );
-                split.draw(simd, Par::Seq, weights, b, &mut rng, &mut scratch, &mut out);
+                split.draw(
+                    scheme,
+                    s,
+                    Par::Seq,
+                    weights,
+                    b,
+                    &mut rng,
+                    &mut scratch,
+                    &mut out,
+                );
                 assert_eq!(out, pooled);
                 assert!(out.windows(2).all(|p| p[0] <= p[1]), "in order: {out:?}");
                 *seen.entry(offspring_counts(&out, 5)).or_default() += 1;
             }
             let mut chi2 = 0.0;
-            let mut outcomes = 0;
-            for a in 0..=m {
-                for b in 0..=m - a {
-                    for c in 0..=m - a - b {
-                        for d in 0..=m - a - b - c {
-                            let k = vec![a, b, c, d, m - a - b - c - d];
-                            let e = multinomial_pmf(&k, &w) * reps as f64;
-                            let o = seen.get(&k).copied().unwrap_or(0) as f64;
-                            chi2 += (o - e).powi(2) / e;
-                            outcomes += 1;
-                        }
-                    }
-                }
+            for (k, &pk) in p {
+                let e = pk * reps as f64;
+                let o = seen.get(k).copied().unwrap_or(0) as f64;
+                chi2 += (o - e).powi(2) / e;
             }
-            assert_eq!(outcomes, 70);
-            let bound = chi2_quantile_999(outcomes - 1);
-            assert!(chi2 < bound, "blocks of {per_block}: χ² {chi2} on 69 df");
+            assert_eq!(seen.keys().filter(|k| !p.contains_key(*k)).count(), 0);
+            let df = p.len() - 1;
+            let bound = chi2_quantile_999(df);
+            assert!(
+                chi2 < bound,
+                "{scheme:?}, blocks of {per_block}: χ² {chi2} on {df} df"
+            );
         }
     }
 
-    /// Blocks without mass get no draws, and every output lands in a block with mass.
+    /// Every way of splitting `m` draws over five particles.
+    fn compositions(m: usize) -> Vec<Vec<usize>> {
+        let mut all = Vec::new();
+        for a in 0..=m {
+            for b in 0..=m - a {
+                for c in 0..=m - a - b {
+                    for d in 0..=m - a - b - c {
+                        all.push(vec![a, b, c, d, m - a - b - c - d]);
+                    }
+                }
+            }
+        }
+        all
+    }
+
+    /// Multinomial in blocks: the offspring counts are jointly Multinomial(4; W) over all
+    /// 70 outcomes, chi-square over 40 000 calls per block size.
+    #[test]
+    fn multinomial_counts_are_jointly_multinomial() {
+        let w = [0.1, 0.25, 0.3, 0.05, 0.3];
+        let p = compositions(4)
+            .into_iter()
+            .map(|k| {
+                let pk = multinomial_pmf(&k, &w);
+                (k, pk)
+            })
+            .collect();
+        chi_square_in_blocks(Blocked::Multinomial, &w, 4, &p, 40_000);
+    }
+
+    /// Residual in blocks: with `W = (0.1, 0.3, 0.35, 0.05, 0.2)` and `M = 4` the floors are
+    /// `(0, 1, 1, 0, 0)` and the `R = 2` residual draws come from `(0.2, 0.1, 0.2, 0.1,
+    /// 0.4)`; the counts beyond the floors are jointly Multinomial(2; those) over all 15
+    /// outcomes, chi-square over 40 000 calls per block size.
+    #[test]
+    fn residual_counts_are_floors_plus_multinomial_draws() {
+        let w = [0.1, 0.3, 0.35, 0.05, 0.2];
+        let floors = [0, 1, 1, 0, 0];
+        let r = [0.2, 0.1, 0.2, 0.1, 0.4];
+        let p = compositions(2)
+            .into_iter()
+            .map(|k| {
+                let pk = multinomial_pmf(&k, &r);
+                (k.iter().zip(&floors).map(|(k, f)| k + f).collect(), pk)
+            })
+            .collect();
+        chi_square_in_blocks(Blocked::Residual, &w, 4, &p, 40_000);
+    }
+
+    /// Blocks without mass get no draws, and every output lands in a block with mass, for
+    /// both schemes.
     #[test]
     fn blocks_without_mass_get_nothing() {
         let scale = [1.0; 3];
@@ -294,20 +424,15 @@ mod tests {
             chunk: 2,
             scale: &scale,
         };
-        let mut split = ChunkSplit::default();
-        let mut scratch = vec![0.0; 6];
-        let mut out = vec![usize::MAX; 100];
-        let mut rng = stream_rng(2, 0);
-        split.draw(
-            Simd::Auto,
-            Par::Seq,
-            weights,
-            1,
-            &mut rng,
-            &mut scratch,
-            &mut out,
-        );
-        assert!(out.iter().all(|&a| a == 2 || a == 3), "{out:?}");
-        assert_eq!(split.starts, [0, 0, 100, 100]);
+        for scheme in [Blocked::Multinomial, Blocked::Residual] {
+            let mut split = ChunkSplit::default();
+            let mut scratch = vec![0.0; 6];
+            let mut out = vec![usize::MAX; 100];
+            let mut rng = stream_rng(2, 0);
+            let (s, p) = (Simd::Auto, Par::Seq);
+            split.draw(scheme, s, p, weights, 1, &mut rng, &mut scratch, &mut out);
+            assert!(out.iter().all(|&a| a == 2 || a == 3), "{scheme:?}: {out:?}");
+            assert_eq!(split.starts, [0, 0, 100, 100], "{scheme:?}");
+        }
     }
 }

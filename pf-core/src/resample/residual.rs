@@ -75,34 +75,84 @@ fn floors_and_mass(w: &[f64], mf: f64) -> (usize, f64, bool) {
     (floors, (s4[0] + s4[1]) + (s4[2] + s4[3]), ok)
 }
 
+/// A weight outside [0, 1] (or NaN) as residual resampling counts it: 0 below, 1 above.
+fn clean(x: f64) -> f64 {
+    if x >= 0.0 { x.min(1.0) } else { 0.0 }
+}
+
+/// `Σ⌊mf·W_j⌋` and `Σ r_j` of the weights `w`, cleaned in place first if any lies outside
+/// [0, 1]: what [`residual_draws`] then finds in them.
+pub(crate) fn floors_and_residual_mass(simd: Simd, w: &mut [f64], mf: f64) -> (usize, f64) {
+    let sums = |w: &[f64]| {
+        dispatch(
+            simd,
+            #[inline(always)]
+            || floors_and_mass(w, mf),
+        )
+    };
+    let (floors, mass, ok) = sums(w);
+    if ok {
+        return (floors, mass);
+    }
+    w.iter_mut().for_each(|x| *x = clean(*x));
+    let (floors, mass, _) = sums(w);
+    (floors, mass)
+}
+
 fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut [usize]) {
-    let (n, m) = (w.len(), ancestors.len());
+    residual_draws(simd, w, ancestors.len() as f64, None, 0, rng, ancestors);
+}
+
+/// `out` ← the floors `⌊mf·W_j⌋` and `R = out.len() − Σ⌊mf·W_j⌋` multinomial draws from the
+/// residuals `r_j = mf·W_j − ⌊mf·W_j⌋`, particle `j` written as `first + j`. The draws are
+/// from `r_j/R`, any mass missing from `Σ r_j` going to the last particle (the contract of
+/// [`Residual`]). For a `block` of a split (see `chunked`), whose weights are clean and
+/// whose `Σ⌊mf·W_j⌋` and `Σ r_j` [`floors_and_residual_mass`] gave, the draws are its share,
+/// from `r_j/Σ r_j`. `mf` is `out.len()` for a whole call.
+pub(crate) fn residual_draws<R: Rng + ?Sized>(
+    simd: Simd,
+    w: &[f64],
+    mf: f64,
+    block: Option<(usize, f64)>,
+    first: usize,
+    rng: &mut R,
+    out: &mut [usize],
+) {
+    let (n, m) = (w.len(), out.len());
     if n == 0 || m == 0 {
         return;
     }
-    let mf = m as f64;
-    let (floors, mass, ok) = dispatch(
-        simd,
-        #[inline(always)]
-        || floors_and_mass(w, mf),
-    );
+    let (floors, mass, ok) = match block {
+        Some((floors, mass)) => (floors, mass, true),
+        None => dispatch(
+            simd,
+            #[inline(always)]
+            || floors_and_mass(w, mf),
+        ),
+    };
     if !ok {
         // Outside the contract (a NaN, negative or above-1 weight, where the floors would
         // mean nothing): such weights count as 0, or 1 above it, on a cleaned copy (an
         // allocation on this path only).
-        let clean: Vec<f64> = w
-            .iter()
-            .map(|&x| if x >= 0.0 { x.min(1.0) } else { 0.0 })
-            .collect();
-        return residual(simd, &clean, rng, ancestors);
+        let clean: Vec<f64> = w.iter().map(|&x| clean(x)).collect();
+        return residual_draws(simd, &clean, mf, None, first, rng, out);
     }
     let r = m.saturating_sub(floors);
     // The draws are from `r_j/R`. Weights summing short of 1 leave `Σ r_j < R`; the missing
     // mass goes to the last particle (where the cumulative-weight schemes put it), as an
-    // extra rate `e`. Weights summing past 1 give the draws of `r_j/Σ r_j`.
+    // extra rate `e`. Weights summing past 1 give the draws of `r_j/Σ r_j`. Each round's
+    // candidate rate is set so that its counts have the mean it needs in all (`Σ keep + e`).
     let rf = r as f64;
-    let scale = if mass > rf { rf / mass } else { 1.0 };
-    let e = (rf - mass * scale).max(0.0);
+    let (scale, e, keep_total) = if block.is_some() && mass > 0.0 {
+        // Counts in proportion to `r_j` whatever their sum: the candidates' rate carries
+        // the normalisation (a block whose residual mass is far below its share of the
+        // draws takes more rounds; since its share is Binomial with a mean proportional to
+        // that mass, the expected number of extra rounds stays below one).
+        (1.0, 0.0, mass)
+    } else {
+        let scale = if mass > rf { rf / mass } else { 1.0 };
+        (scale, (rf - mass * scale).max(0.0), rf)
+    };
     let floor = |j: usize| floor_index(mf * w[j]).0;
     let keep = |j: usize| {
         let x = mf * w[j];
@@ -121,8 +171,7 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
                 match lanes.as_mut() {
                     None => counts.fill(0),
                     Some(lanes) => {
-                        // Each round's counts have mean `rate·R` in all.
-                        let mut rate = (round_mean(r) / rf).min(MAX_RATE);
+                        let mut rate = (round_mean(r) / keep_total).min(MAX_RATE);
                         let mut add = false;
                         while t < r {
                             t += thin(counts, &Thresholds::new(rate), add, &keep, lanes, rng);
@@ -131,13 +180,13 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
                                 counts[n - 1] += extra;
                                 t += extra;
                             }
-                            rate = (round_mean(r.saturating_sub(t)) / rf).min(MAX_RATE);
+                            rate = (round_mean(r.saturating_sub(t)) / keep_total).min(MAX_RATE);
                             add = true;
                         }
                     }
                 }
                 distinct_sorted(t, t - r, rng, removed);
-                write_runs::<4>(counts, removed, &floor, 0, ancestors);
+                write_runs::<4>(counts, removed, &floor, first, out);
             },
         );
     });
