@@ -3,7 +3,10 @@
 //! in particle-steps, so criterion's "elem/s" inverts to nanoseconds per particle-step.
 #![allow(missing_docs)] // criterion's macros generate undocumented items
 
-use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{
+    BenchmarkGroup, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main,
+};
 use pf_core::filter::{BatchBootstrap, BatchConfig, FilterConfig, ParticleFilter};
 use pf_core::mc::Par;
 use pf_core::mc::stream_rng;
@@ -13,10 +16,32 @@ use std::hint::black_box;
 
 const STEPS: usize = 500;
 
-fn bootstrap(c: &mut Criterion) {
+/// The model and `steps` observations simulated from seed 1, as every group uses them.
+fn ar1_case(steps: usize) -> (NoisyAr1, Vec<Option<f64>>) {
     let model = NoisyAr1::new(0.98, 0.2, 1.0).expect("valid parameters");
-    let (_, ys) = model.simulate(STEPS - 1, &mut stream_rng(1, 0));
-    let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
+    let (_, ys) = model.simulate(steps - 1, &mut stream_rng(1, 0));
+    (model, ys.into_iter().map(Some).collect())
+}
+
+/// The fast path with `cfg` over `ys`, on one thread (`1-thread`) and on the current pool
+/// (`rayon`, both cores), under the ids `id(name)`.
+fn bench_batch(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    id: impl Fn(&str) -> BenchmarkId,
+    model: NoisyAr1,
+    cfg: BatchConfig,
+    ys: &[Option<f64>],
+) {
+    for (name, par) in [("1-thread", Par::Seq), ("rayon", Par::Rayon)] {
+        let mut f = BatchBootstrap::new(model, BatchConfig { par, ..cfg }).expect("valid config");
+        group.bench_function(id(name), |b| {
+            b.iter(|| black_box(f.run(ys).expect("filter runs").log_lik))
+        });
+    }
+}
+
+fn bootstrap(c: &mut Criterion) {
+    let (model, ys) = ar1_case(STEPS);
     let mut group = c.benchmark_group("bootstrap_ar1");
     group.sample_size(10);
     for n in [1_000usize, 10_000, 100_000, 1_000_000] {
@@ -42,23 +67,13 @@ fn bootstrap(c: &mut Criterion) {
 
 /// The structure-of-arrays fast path, on one thread and on the current pool (both cores).
 fn batch(c: &mut Criterion) {
-    let model = NoisyAr1::new(0.98, 0.2, 1.0).expect("valid parameters");
-    let (_, ys) = model.simulate(STEPS - 1, &mut stream_rng(1, 0));
-    let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
+    let (model, ys) = ar1_case(STEPS);
     let mut group = c.benchmark_group("batch_ar1");
     group.sample_size(10);
     for n in [1_000usize, 10_000, 100_000, 1_000_000] {
         group.throughput(Throughput::Elements((n * STEPS) as u64));
-        for (name, par) in [("1-thread", Par::Seq), ("rayon", Par::Rayon)] {
-            let cfg = BatchConfig {
-                par,
-                ..BatchConfig::new(n, 2)
-            };
-            let mut f = BatchBootstrap::new(model, cfg).expect("valid config");
-            group.bench_with_input(BenchmarkId::new(name, format!("N={n}")), &n, |b, _| {
-                b.iter(|| black_box(f.run(&ys).expect("filter runs").log_lik))
-            });
-        }
+        let id = |name: &str| BenchmarkId::new(name, format!("N={n}"));
+        bench_batch(&mut group, id, model, BatchConfig::new(n, 2), &ys);
     }
     group.finish();
 }
@@ -68,22 +83,12 @@ fn batch(c: &mut Criterion) {
 fn batch_large(c: &mut Criterion) {
     const LARGE_STEPS: usize = 20;
     const N: usize = 10_000_000;
-    let model = NoisyAr1::new(0.98, 0.2, 1.0).expect("valid parameters");
-    let (_, ys) = model.simulate(LARGE_STEPS - 1, &mut stream_rng(1, 0));
-    let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
+    let (model, ys) = ar1_case(LARGE_STEPS);
     let mut group = c.benchmark_group("batch_ar1_large");
     group.sample_size(10);
     group.throughput(Throughput::Elements((N * LARGE_STEPS) as u64));
-    for (name, par) in [("1-thread", Par::Seq), ("rayon", Par::Rayon)] {
-        let cfg = BatchConfig {
-            par,
-            ..BatchConfig::new(N, 2)
-        };
-        let mut f = BatchBootstrap::new(model, cfg).expect("valid config");
-        group.bench_with_input(BenchmarkId::new(name, format!("N={N}")), &N, |b, _| {
-            b.iter(|| black_box(f.run(&ys).expect("filter runs").log_lik))
-        });
-    }
+    let id = |name: &str| BenchmarkId::new(name, format!("N={N}"));
+    bench_batch(&mut group, id, model, BatchConfig::new(N, 2), &ys);
     group.finish();
 }
 
@@ -92,25 +97,17 @@ fn batch_large(c: &mut Criterion) {
 fn batch_schemes(c: &mut Criterion) {
     const SCHEME_STEPS: usize = 100;
     const N: usize = 1_000_000;
-    let model = NoisyAr1::new(0.98, 0.2, 1.0).expect("valid parameters");
-    let (_, ys) = model.simulate(SCHEME_STEPS - 1, &mut stream_rng(1, 0));
-    let ys: Vec<Option<f64>> = ys.into_iter().map(Some).collect();
+    let (model, ys) = ar1_case(SCHEME_STEPS);
     let mut group = c.benchmark_group("batch_ar1_schemes");
     group.sample_size(10);
     group.throughput(Throughput::Elements((N * SCHEME_STEPS) as u64));
     for resampler in Resampler::ALL {
-        for (name, par) in [("1-thread", Par::Seq), ("rayon", Par::Rayon)] {
-            let cfg = BatchConfig {
-                par,
-                resampler,
-                ..BatchConfig::new(N, 2)
-            };
-            let mut f = BatchBootstrap::new(model, cfg).expect("valid config");
-            let id = BenchmarkId::new(format!("{resampler}/{name}"), format!("N={N}"));
-            group.bench_with_input(id, &N, |b, _| {
-                b.iter(|| black_box(f.run(&ys).expect("filter runs").log_lik))
-            });
-        }
+        let id = |name: &str| BenchmarkId::new(format!("{resampler}/{name}"), format!("N={N}"));
+        let cfg = BatchConfig {
+            resampler,
+            ..BatchConfig::new(N, 2)
+        };
+        bench_batch(&mut group, id, model, cfg, &ys);
     }
     group.finish();
 }
