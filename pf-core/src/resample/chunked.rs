@@ -25,7 +25,7 @@
 //! interleaved rounds, scratch harness, 2026-11-25).
 
 use super::multinomial::multinomial_draws;
-use super::residual::{floors_and_residual_mass, residual_draws};
+use super::residual::{ResidualSums, residual_draws, residual_sums};
 use crate::mc::{Par, stream_rng};
 use crate::simd::Simd;
 use rand::{Rng, RngExt};
@@ -101,10 +101,8 @@ struct Blocks<'a> {
     per_block: usize,
     /// `starts[b]`: where block `b`'s draws begin in the output.
     starts: &'a [usize],
-    /// Block `b`'s mass (multinomial) or residual mass (residual).
-    mass: &'a [f64],
-    /// Block `b`'s floors (residual).
-    fixed: &'a [usize],
+    /// Block `b`'s mass (and no floors) for multinomial, its residual sums for residual.
+    sums: &'a [ResidualSums],
     /// The key of the blocks' streams: block `b` draws from `stream_rng(key, b)`.
     key: u64,
     /// `M`.
@@ -115,9 +113,9 @@ struct Blocks<'a> {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct ChunkSplit {
     starts: Vec<usize>,
-    mass: Vec<f64>,
-    /// Each block's outputs fixed before the split (residual's floors).
-    fixed: Vec<usize>,
+    /// Per block: the outputs fixed before the split (residual's floors), the mass the
+    /// draws split by, and the largest residual.
+    sums: Vec<ResidualSums>,
     /// The mass of blocks `b, b + 1, …`.
     rest: Vec<f64>,
 }
@@ -144,50 +142,48 @@ impl ChunkSplit {
         if blocks == 0 || m == 0 {
             return;
         }
-        self.mass.clear();
-        self.mass.extend((0..blocks).map(|b| {
+        self.sums.clear();
+        self.sums.extend((0..blocks).map(|b| {
             let end = ((b + 1) * per_block).min(chunks);
-            (b * per_block..end).map(|d| w.mass(d)).sum::<f64>()
+            ResidualSums {
+                floors: 0,
+                mass: (b * per_block..end).map(|d| w.mass(d)).sum::<f64>(),
+                peak: 0.0,
+            }
         }));
-        self.fixed.clear();
-        self.fixed.resize(blocks, 0);
         if scheme == Blocked::Residual {
             // The weights normalised into `scratch` (where the blocks draw from them), and
-            // each block's floors and residual mass, block by block side by side.
-            let (inv, mf, len) = (
-                1.0 / self.mass.iter().sum::<f64>(),
-                m as f64,
-                per_block * w.chunk,
-            );
-            let block =
-                |(b, (ws, (fixed, mass))): (usize, (&mut [f64], (&mut usize, &mut f64)))| {
-                    let d0 = b * per_block;
-                    w.write(d0, (d0 + per_block).min(chunks), inv, ws);
-                    (*fixed, *mass) = floors_and_residual_mass(simd, ws, mf);
-                };
+            // each block's residual sums, block by block side by side.
+            let total: f64 = self.sums.iter().map(|s| s.mass).sum();
+            let (inv, mf, len) = (1.0 / total, m as f64, per_block * w.chunk);
+            let block = |(b, (ws, sums)): (usize, (&mut [f64], &mut ResidualSums))| {
+                let d0 = b * per_block;
+                w.write(d0, (d0 + per_block).min(chunks), inv, ws);
+                *sums = residual_sums(simd, ws, mf);
+            };
             let scratch = &mut scratch[..w.cum.len()];
             match par {
                 Par::Seq => scratch
                     .chunks_mut(len)
-                    .zip(self.fixed.iter_mut().zip(self.mass.iter_mut()))
+                    .zip(self.sums.iter_mut())
                     .enumerate()
                     .for_each(block),
                 Par::Rayon => scratch
                     .par_chunks_mut(len)
-                    .zip(self.fixed.par_iter_mut().zip(self.mass.par_iter_mut()))
+                    .zip(self.sums.par_iter_mut())
                     .enumerate()
                     .for_each(block),
             }
         }
         // The draws beyond the fixed outputs (all of them for multinomial).
-        let fixed: usize = self.fixed.iter().sum();
+        let fixed: usize = self.sums.iter().map(|s| s.floors).sum();
         // Summed from the end, `rest[b] ≥ mass[b]` exactly, and the last block with mass
         // has `rest[b] = mass[b]`: it takes every draw left, and no draw reaches a block
         // without mass.
         self.rest.clear();
         self.rest.resize(blocks + 1, 0.0);
         for b in (0..blocks).rev() {
-            self.rest[b] = self.mass[b] + self.rest[b + 1];
+            self.rest[b] = self.sums[b].mass + self.rest[b + 1];
         }
         self.starts.clear();
         self.starts.resize(blocks + 1, 0);
@@ -195,7 +191,7 @@ impl ChunkSplit {
         let mut left = m.saturating_sub(fixed);
         for b in 0..blocks {
             let p = if self.rest[b] > 0.0 {
-                (self.mass[b] / self.rest[b]).min(1.0)
+                (self.sums[b].mass / self.rest[b]).min(1.0)
             } else {
                 0.0
             };
@@ -206,7 +202,7 @@ impl ChunkSplit {
             };
             // Capped at M: floors summing past it (weights past 1 beyond rounding) only
             // shorten the last blocks, whose runs then stop at the end of `out`.
-            self.starts[b + 1] = (self.starts[b] + self.fixed[b] + k).min(m);
+            self.starts[b + 1] = (self.starts[b] + self.sums[b].floors + k).min(m);
             left -= k;
         }
         // Weights with no mass at all (outside the contract) leave draws over: the last
@@ -219,8 +215,7 @@ impl ChunkSplit {
             w,
             per_block,
             starts: &self.starts,
-            mass: &self.mass,
-            fixed: &self.fixed,
+            sums: &self.sums,
             key,
             m,
         };
@@ -266,12 +261,11 @@ fn draw_block(ctx: &Blocks<'_>, b: usize, w: &mut [f64], out: &mut [usize]) {
     let rng = &mut stream_rng(ctx.key, b as u64);
     match ctx.scheme {
         Blocked::Multinomial => {
-            ctx.w.write(d0, d1, 1.0 / ctx.mass[b], w);
+            ctx.w.write(d0, d1, 1.0 / ctx.sums[b].mass, w);
             multinomial_draws(ctx.simd, w, lo, rng, out);
         }
         Blocked::Residual => {
-            let sums = Some((ctx.fixed[b], ctx.mass[b]));
-            residual_draws(ctx.simd, w, ctx.m as f64, sums, lo, rng, out);
+            residual_draws(ctx.simd, w, ctx.m as f64, Some(ctx.sums[b]), lo, rng, out);
         }
     }
 }

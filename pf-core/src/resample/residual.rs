@@ -51,28 +51,45 @@ thread_local! {
     static SCRATCH: RefCell<(Vec<usize>, Vec<usize>)> = const { RefCell::new((Vec::new(), Vec::new())) };
 }
 
-/// `Σ⌊M·W_j⌋`, `Σ r_j`, and whether every weight lies in [0, 1] (no NaN), four partial
-/// sums at a time (a vectorisable loop).
+/// What residual resampling needs to know of its weights before it draws.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ResidualSums {
+    /// `Σ⌊M·W_j⌋`.
+    pub(crate) floors: usize,
+    /// `Σ r_j`.
+    pub(crate) mass: f64,
+    /// `max_j r_j`.
+    pub(crate) peak: f64,
+}
+
+/// The [`ResidualSums`] of `w`, and whether every weight lies in [0, 1] (no NaN), four
+/// partial sums at a time (a vectorisable loop).
 #[inline(always)]
-fn floors_and_mass(w: &[f64], mf: f64) -> (usize, f64, bool) {
-    let (mut f4, mut s4, mut ok) = ([0usize; 4], [0.0f64; 4], true);
+fn floors_and_mass(w: &[f64], mf: f64) -> (ResidualSums, bool) {
+    let (mut f4, mut s4, mut p4, mut ok) = ([0usize; 4], [0.0f64; 4], [0.0f64; 4], true);
+    let mut add = |l: usize, wj: f64| {
+        ok &= (0.0..=1.0).contains(&wj);
+        let (f, ff) = floor_index(mf * wj);
+        let r = mf * wj - ff;
+        f4[l] = f4[l].wrapping_add(f);
+        s4[l] += r;
+        p4[l] = if r > p4[l] { r } else { p4[l] };
+    };
     let mut chunks = w.chunks_exact(4);
     for c in &mut chunks {
-        for l in 0..4 {
-            ok &= (0.0..=1.0).contains(&c[l]);
-            let (f, ff) = floor_index(mf * c[l]);
-            f4[l] = f4[l].wrapping_add(f);
-            s4[l] += mf * c[l] - ff;
+        for (l, &wj) in c.iter().enumerate() {
+            add(l, wj);
         }
     }
     for &wj in chunks.remainder() {
-        ok &= (0.0..=1.0).contains(&wj);
-        let (f, ff) = floor_index(mf * wj);
-        f4[0] = f4[0].wrapping_add(f);
-        s4[0] += mf * wj - ff;
+        add(0, wj);
     }
-    let floors = f4.iter().fold(0usize, |a, &f| a.wrapping_add(f));
-    (floors, (s4[0] + s4[1]) + (s4[2] + s4[3]), ok)
+    let sums = ResidualSums {
+        floors: f4.iter().fold(0usize, |a, &f| a.wrapping_add(f)),
+        mass: (s4[0] + s4[1]) + (s4[2] + s4[3]),
+        peak: p4.iter().fold(0.0, |a: f64, &p| a.max(p)),
+    };
+    (sums, ok)
 }
 
 /// A weight outside [0, 1] (or NaN) as residual resampling counts it: 0 below, 1 above.
@@ -80,9 +97,9 @@ fn clean(x: f64) -> f64 {
     if x >= 0.0 { x.min(1.0) } else { 0.0 }
 }
 
-/// `Σ⌊mf·W_j⌋` and `Σ r_j` of the weights `w`, cleaned in place first if any lies outside
+/// The [`ResidualSums`] of the weights `w`, cleaned in place first if any lies outside
 /// [0, 1]: what [`residual_draws`] then finds in them.
-pub(crate) fn floors_and_residual_mass(simd: Simd, w: &mut [f64], mf: f64) -> (usize, f64) {
+pub(crate) fn residual_sums(simd: Simd, w: &mut [f64], mf: f64) -> ResidualSums {
     let sums = |w: &[f64]| {
         dispatch(
             simd,
@@ -90,13 +107,12 @@ pub(crate) fn floors_and_residual_mass(simd: Simd, w: &mut [f64], mf: f64) -> (u
             || floors_and_mass(w, mf),
         )
     };
-    let (floors, mass, ok) = sums(w);
+    let (found, ok) = sums(w);
     if ok {
-        return (floors, mass);
+        return found;
     }
     w.iter_mut().for_each(|x| *x = clean(*x));
-    let (floors, mass, _) = sums(w);
-    (floors, mass)
+    sums(w).0
 }
 
 fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut [usize]) {
@@ -107,13 +123,13 @@ fn residual<R: Rng + ?Sized>(simd: Simd, w: &[f64], rng: &mut R, ancestors: &mut
 /// residuals `r_j = mf·W_j − ⌊mf·W_j⌋`, particle `j` written as `first + j`. The draws are
 /// from `r_j/R`, any mass missing from `Σ r_j` going to the last particle (the contract of
 /// [`Residual`]). For a `block` of a split (see `chunked`), whose weights are clean and
-/// whose `Σ⌊mf·W_j⌋` and `Σ r_j` [`floors_and_residual_mass`] gave, the draws are its share,
-/// from `r_j/Σ r_j`. `mf` is `out.len()` for a whole call.
+/// whose sums [`residual_sums`] gave, the draws are its share, from `r_j/Σ r_j`. `mf` is
+/// `out.len()` for a whole call.
 pub(crate) fn residual_draws<R: Rng + ?Sized>(
     simd: Simd,
     w: &[f64],
     mf: f64,
-    block: Option<(usize, f64)>,
+    block: Option<ResidualSums>,
     first: usize,
     rng: &mut R,
     out: &mut [usize],
@@ -122,14 +138,15 @@ pub(crate) fn residual_draws<R: Rng + ?Sized>(
     if n == 0 || m == 0 {
         return;
     }
-    let (floors, mass, ok) = match block {
-        Some((floors, mass)) => (floors, mass, true),
+    let (sums, ok) = match block {
+        Some(sums) => (sums, true),
         None => dispatch(
             simd,
             #[inline(always)]
             || floors_and_mass(w, mf),
         ),
     };
+    let (floors, mass) = (sums.floors, sums.mass);
     if !ok {
         // Outside the contract (a NaN, negative or above-1 weight, where the floors would
         // mean nothing): such weights count as 0, or 1 above it, on a cleaned copy (an
@@ -144,11 +161,13 @@ pub(crate) fn residual_draws<R: Rng + ?Sized>(
     // candidate rate is set so that its counts have the mean it needs in all (`Σ keep + e`).
     let rf = r as f64;
     let (scale, e, keep_total) = if block.is_some() && mass > 0.0 {
-        // Counts in proportion to `r_j` whatever their sum: the candidates' rate carries
-        // the normalisation (a block whose residual mass is far below its share of the
-        // draws takes more rounds; since its share is Binomial with a mean proportional to
-        // that mass, the expected number of extra rounds stays below one).
-        (1.0, 0.0, mass)
+        // Counts in proportion to `r_j` whatever their sum: keep probabilities
+        // `r_j/max r_j` (rounded down, so at most 1), and the candidates' rate carries the
+        // normalisation. With the largest keep probability 1, a round keeps at least as
+        // many candidates as one particle has, so a block whose residual mass is far below
+        // its share of the draws still needs few rounds.
+        let scale = (1.0 - f64::EPSILON) / sums.peak;
+        (scale, 0.0, mass * scale)
     } else {
         let scale = if mass > rf { rf / mass } else { 1.0 };
         (scale, (rf - mass * scale).max(0.0), rf)
@@ -227,6 +246,32 @@ mod tests {
             );
             assert_eq!(auto, portable, "M = {m}");
         }
+    }
+
+    /// A block whose residual mass is tiny but which must make draws (its share of a
+    /// split, see `chunked`) makes them from its residuals in few rounds: keep
+    /// probabilities `r_j/max r_j` put the largest at 1, where `r_j` alone would keep one
+    /// candidate in 10⁹ and take about 10⁹ rounds.
+    #[test]
+    fn a_block_with_tiny_residual_mass_draws_quickly() {
+        let mut w = vec![0.0; 100];
+        (w[3], w[70]) = (1e-9, 3e-9);
+        let sums = residual_sums(Simd::Auto, &mut w, 1.0);
+        assert_eq!((sums.floors, sums.peak), (0, 3e-9));
+        // The draws follow r_j/Σ r_j: particle 70 (written as 75) takes about three in
+        // four. 20 calls × 8 draws: Binomial(160, 3/4), mean 120, standard deviation 5.5.
+        let mut heavy = 0;
+        for seed in 0..20 {
+            let mut out = vec![usize::MAX; 8];
+            let rng = &mut stream_rng(5, seed);
+            residual_draws(Simd::Auto, &w, 1.0, Some(sums), 5, rng, &mut out);
+            assert!(out.iter().all(|&a| a == 8 || a == 75), "{out:?}");
+            heavy += out.iter().filter(|&&a| a == 75).count();
+        }
+        assert!(
+            (120 - 5 * 6..=120 + 5 * 6).contains(&heavy),
+            "{heavy} of 160"
+        );
     }
 
     /// Weights that are exact multiples of `1/M` leave no residual: the floors alone.
