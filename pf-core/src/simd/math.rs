@@ -1,9 +1,9 @@
 //! Branch-free elementary functions for the vectorised kernels.
 //!
-//! [`exp_nonpositive`] is a table-driven `exp` (Tang 1989; the layout of glibc's and
-//! musl's, with 64 entries) for the range the filter needs, `x ≤ 0`: the reduction
-//! `x = (64k + j)·ln 2/64 + r`, `|r| ≤ ln 2/128`, with `ln 2` split in fdlibm's two parts so
-//! that `k` and `j` cost no accuracy; then `e^x = 2^k · 2^{j/64} · e^r`, with `2^{j/64}`
+//! [`exp_nonpositive`] is a table-driven `exp` (Tang 1989, the method of glibc's and
+//! musl's `exp`, here with a 64-entry table) for the range the filter needs, `x ≤ 0`: the
+//! reduction `x = (64k + j)·ln 2/64 + r`, `|r| ≤ ln 2/128`, with `ln 2` split in fdlibm's
+//! two parts so that `k` and `j` cost no accuracy; then `e^x = 2^k · 2^{j/64} · e^r`, with `2^{j/64}`
 //! from a table of correctly rounded doubles, `e^r − 1` from its Taylor polynomial of
 //! degree 5 (truncation below 4·10⁻¹⁷ relative at `|r| ≤ ln 2/128`), and `2^k` applied to
 //! the exponent bits. Its relative error against the platform's `f64::exp` is below
