@@ -3,10 +3,10 @@
 //! [`exp_nonpositive`] is a table-driven `exp` (Tang 1989, the method of glibc's and
 //! musl's `exp`, here with a 64-entry table) for the range the filter needs, `x ≤ 0`: the
 //! reduction `x = (64k + j)·ln 2/64 + r`, `|r| ≤ ln 2/128`, with `ln 2` split in fdlibm's
-//! two parts so that `k` and `j` cost no accuracy; then `e^x = 2^k · 2^{j/64} · e^r`, with `2^{j/64}`
-//! from a table of correctly rounded doubles, `e^r − 1` from its Taylor polynomial of
-//! degree 5 (truncation below 4·10⁻¹⁷ relative at `|r| ≤ ln 2/128`), and `2^k` applied to
-//! the exponent bits. Its relative error against the platform's `f64::exp` is below
+//! two parts so that `k` and `j` cost no accuracy; then `e^x = 2^k · 2^{j/64} · e^r`, with
+//! `2^{j/64}` from a table of correctly rounded doubles, `e^r − 1` from its Taylor
+//! polynomial of degree 5 (truncation below 4·10⁻¹⁷ relative at `|r| ≤ ln 2/128`), and
+//! `2^k` applied to the exponent bits. Its relative error against the platform's `f64::exp` is below
 //! 2·2⁻⁵² on `[−708, 0]` (tested; at most 1.0·2⁻⁵² over 4·10⁶ random points). Below −708
 //! it returns 0 (a weight `e^{−708}` times the largest one, which no sum or resampling step
 //! can see), including at `−∞`.
