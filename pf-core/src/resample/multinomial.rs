@@ -1,7 +1,7 @@
 //! Multinomial resampling in O(N): Poisson offspring counts, conditioned on their total.
 
 use super::Resample;
-use super::poisson::{distinct_sorted, poisson_counts, round_mean, write_runs};
+use super::poisson::{DrawBuffers, distinct_sorted, poisson_counts, round_mean, write_runs};
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::Rng;
 use std::cell::RefCell;
@@ -38,9 +38,8 @@ impl Resample for Multinomial {
 }
 
 thread_local! {
-    /// Scratch of [`multinomial_draws`] (counts, removed draws), reused from call to call
-    /// on each thread (no allocation once grown; every call overwrites what it reads).
-    static SCRATCH: RefCell<(Vec<usize>, Vec<usize>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+    /// Scratch of [`multinomial_draws`], per thread.
+    static SCRATCH: RefCell<DrawBuffers> = const { RefCell::new(DrawBuffers::new()) };
 }
 
 /// `out` ← `M = out.len()` independent draws from the weights `w` (normalised here), in
@@ -59,7 +58,11 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
     }
     let mut lanes = LaneRng::from_rng(rng);
     SCRATCH.with(|cell| {
-        let (counts, removed) = &mut *cell.borrow_mut();
+        let DrawBuffers {
+            counts,
+            removed,
+            seen,
+        } = &mut *cell.borrow_mut();
         // No clearing: the first round overwrites every count.
         counts.resize(n, 0);
         dispatch(
@@ -83,7 +86,7 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
                     let s = round_mean(m - t) / mass;
                     t += poisson_counts(counts, w, s, true, &mut lanes, rng).0;
                 }
-                distinct_sorted(t, t - m, rng, removed);
+                distinct_sorted(t, t - m, rng, seen, removed);
                 write_runs::<8>(counts, removed, &|_| 0, first, out);
             },
         );

@@ -2,7 +2,7 @@
 //! particle by thinning a Poisson process.
 
 use super::Resample;
-use super::poisson::{Thresholds, distinct_sorted, round_mean, thin, write_runs};
+use super::poisson::{DrawBuffers, Thresholds, distinct_sorted, round_mean, thin, write_runs};
 use crate::simd::math::floor_index;
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::Rng;
@@ -46,9 +46,8 @@ impl Resample for Residual {
 const MAX_RATE: f64 = 4.0;
 
 thread_local! {
-    /// Scratch of [`residual`], reused from call to call on each thread (no allocation once
-    /// grown; every call overwrites what it reads).
-    static SCRATCH: RefCell<(Vec<usize>, Vec<usize>)> = const { RefCell::new((Vec::new(), Vec::new())) };
+    /// Scratch of [`residual`], per thread.
+    static SCRATCH: RefCell<DrawBuffers> = const { RefCell::new(DrawBuffers::new()) };
 }
 
 /// What residual resampling needs to know of its weights before it draws.
@@ -179,7 +178,11 @@ pub(crate) fn residual_draws<R: Rng + ?Sized>(
     };
     let mut lanes = (r > 0).then(|| LaneRng::from_rng(rng));
     SCRATCH.with(|cell| {
-        let (counts, removed) = &mut *cell.borrow_mut();
+        let DrawBuffers {
+            counts,
+            removed,
+            seen,
+        } = &mut *cell.borrow_mut();
         // No clearing: the first round overwrites every count.
         counts.resize(n, 0);
         dispatch(
@@ -204,7 +207,7 @@ pub(crate) fn residual_draws<R: Rng + ?Sized>(
                         }
                     }
                 }
-                distinct_sorted(t, t - r, rng, removed);
+                distinct_sorted(t, t - r, rng, seen, removed);
                 write_runs::<4>(counts, removed, &floor, first, out);
             },
         );
