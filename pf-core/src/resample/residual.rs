@@ -62,15 +62,19 @@ pub(crate) struct ResidualSums {
 }
 
 /// The [`ResidualSums`] of `w`, and whether every weight lies in [0, 1] (no NaN), four
-/// partial sums at a time (a vectorisable loop).
+/// partial sums at a time (a vectorisable loop). Everything is summed in floats, the floors
+/// too (integers below 2⁵³, so exactly), and the weights outside [0, 1] are counted rather
+/// than flagged: with an integer sum and a boolean beside the float ones, the pass took
+/// 14 % of residual resampling's time at N = 10⁴, and 10.7 % this way (performance log).
 #[inline(always)]
 fn floors_and_mass(w: &[f64], mf: f64) -> (ResidualSums, bool) {
-    let (mut f4, mut s4, mut p4, mut ok) = ([0usize; 4], [0.0f64; 4], [0.0f64; 4], true);
+    let (mut f4, mut s4, mut p4, mut bad4) = ([0.0f64; 4], [0.0f64; 4], [0.0f64; 4], [0.0f64; 4]);
     let mut add = |l: usize, wj: f64| {
-        ok &= (0.0..=1.0).contains(&wj);
-        let (f, ff) = floor_index(mf * wj);
-        let r = mf * wj - ff;
-        f4[l] = f4[l].wrapping_add(f);
+        bad4[l] += if (0.0..=1.0).contains(&wj) { 0.0 } else { 1.0 };
+        let x = mf * wj;
+        let ff = floor_index(x).1;
+        let r = x - ff;
+        f4[l] += ff;
         s4[l] += r;
         p4[l] = if r > p4[l] { r } else { p4[l] };
     };
@@ -83,8 +87,11 @@ fn floors_and_mass(w: &[f64], mf: f64) -> (ResidualSums, bool) {
     for &wj in chunks.remainder() {
         add(0, wj);
     }
+    let ok = (bad4[0] + bad4[1]) + (bad4[2] + bad4[3]) == 0.0;
     let sums = ResidualSums {
-        floors: f4.iter().fold(0usize, |a, &f| a.wrapping_add(f)),
+        // Only read when `ok`; each floor is then at most `mf`, and the sum exact below 2⁵³
+        // (a sum past `mf`, from weights summing past 1, leaves no draws either way).
+        floors: ((f4[0] + f4[1]) + (f4[2] + f4[3])) as usize,
         mass: (s4[0] + s4[1]) + (s4[2] + s4[3]),
         peak: p4.iter().fold(0.0, |a: f64, &p| a.max(p)),
     };
