@@ -35,8 +35,8 @@ use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
 use crate::resample::{
-    BLOCK, Blocked, ChunkSplit, ChunkedWeights, Resampler, SCAN, chunks_per_block, prefix4_each,
-    stratified_index_in,
+    BLOCK, BlockPlan, Blocked, ChunkSplit, ChunkedWeights, Resampler, SCAN, chunks_per_block,
+    prefix4_each, stratified_index_in,
 };
 use crate::simd::math::{ceil_index_in, exp_nonpositive, exp_nonpositive_lanes};
 use crate::simd::{LaneRng, Simd, dispatch, prefetch};
@@ -497,12 +497,15 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             chunk: self.cfg.chunk,
             scale: &self.scale,
         };
-        self.split.draw(
+        let plan = BlockPlan {
             scheme,
-            self.cfg.simd,
-            self.cfg.par,
+            simd: self.cfg.simd,
+            par: self.cfg.par,
+            per_block: chunks_per_block(self.cfg.n_particles, self.cfg.chunk, self.split_block),
+        };
+        self.split.draw(
+            plan,
             w,
-            chunks_per_block(self.cfg.n_particles, self.cfg.chunk, self.split_block),
             &mut self.master,
             &mut self.w_norm,
             &mut self.ancestors,

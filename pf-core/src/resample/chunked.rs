@@ -41,6 +41,18 @@ pub(crate) enum Blocked {
     Residual,
 }
 
+/// How a call's draws are split and run: which scheme, which kernels, on which threads,
+/// and how many chunks make a block (the split, and so the draws, depend on the sizes
+/// alone, never on the threads).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct BlockPlan {
+    pub(crate) scheme: Blocked,
+    pub(crate) simd: Simd,
+    pub(crate) par: Par,
+    /// Chunks per block (see [`chunks_per_block`]).
+    pub(crate) per_block: usize,
+}
+
 /// Particles per block, at least: from `N = 2·BLOCK` the draws run on two threads or more.
 pub(crate) const BLOCK: usize = 1 << 14;
 
@@ -93,12 +105,8 @@ impl ChunkedWeights<'_> {
 
 /// What every block reads.
 struct Blocks<'a> {
-    scheme: Blocked,
-    simd: Simd,
-    par: Par,
+    plan: BlockPlan,
     w: ChunkedWeights<'a>,
-    /// Chunks per block.
-    per_block: usize,
     /// `starts[b]`: where block `b`'s draws begin in the output.
     starts: &'a [usize],
     /// Block `b`'s mass (and no floors) for multinomial, its residual sums for residual.
@@ -121,21 +129,22 @@ pub(crate) struct ChunkSplit {
 }
 
 impl ChunkSplit {
-    /// `out` ← `M = out.len()` ancestors from the weights `w` under `scheme`, in blocks of
-    /// `per_block` chunks. `scratch` is as long as `w.cum`; `rng` draws the split and the
-    /// blocks' key.
-    #[allow(clippy::too_many_arguments)] // each is one of the draw's inputs
+    /// `out` ← `M = out.len()` ancestors from the weights `w` as `plan` says. `scratch` is
+    /// as long as `w.cum`; `rng` draws the split and the blocks' key.
     pub(crate) fn draw<R: Rng + ?Sized>(
         &mut self,
-        scheme: Blocked,
-        simd: Simd,
-        par: Par,
+        plan: BlockPlan,
         w: ChunkedWeights<'_>,
-        per_block: usize,
         rng: &mut R,
         scratch: &mut [f64],
         out: &mut [usize],
     ) {
+        let BlockPlan {
+            scheme,
+            simd,
+            par,
+            per_block,
+        } = plan;
         let chunks = w.cum.len().div_ceil(w.chunk);
         let blocks = chunks.div_ceil(per_block);
         let m = out.len();
@@ -209,11 +218,8 @@ impl ChunkSplit {
         // block takes them, as the cumulative-weight schemes give them the last particle.
         self.starts[blocks] = m;
         let ctx = Blocks {
-            scheme,
-            simd,
-            par,
+            plan,
             w,
-            per_block,
             starts: &self.starts,
             sums: &self.sums,
             key,
@@ -231,9 +237,9 @@ fn split(ctx: &Blocks<'_>, b0: usize, b1: usize, w: &mut [f64], out: &mut [usize
         return draw_block(ctx, b0, w, out);
     }
     let mid = (b0 + b1) / 2;
-    let (w0, w1) = w.split_at_mut((mid - b0) * ctx.per_block * ctx.w.chunk);
+    let (w0, w1) = w.split_at_mut((mid - b0) * ctx.plan.per_block * ctx.w.chunk);
     let (o0, o1) = out.split_at_mut(ctx.starts[mid] - ctx.starts[b0]);
-    match ctx.par {
+    match ctx.plan.par {
         Par::Seq => {
             split(ctx, b0, mid, w0, o0);
             split(ctx, mid, b1, w1, o1);
@@ -254,18 +260,26 @@ fn draw_block(ctx: &Blocks<'_>, b: usize, w: &mut [f64], out: &mut [usize]) {
     if out.is_empty() {
         return;
     }
-    let (c, d0) = (ctx.w.chunk, b * ctx.per_block);
-    let d1 = (d0 + ctx.per_block).min(ctx.w.cum.len().div_ceil(c));
+    let (c, d0) = (ctx.w.chunk, b * ctx.plan.per_block);
+    let d1 = (d0 + ctx.plan.per_block).min(ctx.w.cum.len().div_ceil(c));
     let (lo, hi) = (d0 * c, (d1 * c).min(ctx.w.cum.len()));
     let w = &mut w[..hi - lo];
     let rng = &mut stream_rng(ctx.key, b as u64);
-    match ctx.scheme {
+    match ctx.plan.scheme {
         Blocked::Multinomial => {
             ctx.w.write(d0, d1, 1.0 / ctx.sums[b].mass, w);
-            multinomial_draws(ctx.simd, w, lo, rng, out);
+            multinomial_draws(ctx.plan.simd, w, lo, rng, out);
         }
         Blocked::Residual => {
-            residual_draws(ctx.simd, w, ctx.m as f64, Some(ctx.sums[b]), lo, rng, out);
+            residual_draws(
+                ctx.plan.simd,
+                w,
+                ctx.m as f64,
+                Some(ctx.sums[b]),
+                lo,
+                rng,
+                out,
+            );
         }
     }
 }
@@ -317,27 +331,15 @@ mod tests {
             let (mut out, mut pooled) = (vec![0usize; m], vec![0usize; m]);
             for _ in 0..reps {
                 let mut again = rng.clone();
-                let (s, b) = (Simd::Auto, per_block);
-                split.draw(
+                let plan = |par| BlockPlan {
                     scheme,
-                    s,
-                    Par::Rayon,
-                    weights,
-                    b,
-                    &mut again,
-                    &mut scratch,
-                    &mut pooled,
-                );
-                split.draw(
-                    scheme,
-                    s,
-                    Par::Seq,
-                    weights,
-                    b,
-                    &mut rng,
-                    &mut scratch,
-                    &mut out,
-                );
+                    simd: Simd::Auto,
+                    par,
+                    per_block,
+                };
+                let (pooled_plan, seq_plan) = (plan(Par::Rayon), plan(Par::Seq));
+                split.draw(pooled_plan, weights, &mut again, &mut scratch, &mut pooled);
+                split.draw(seq_plan, weights, &mut rng, &mut scratch, &mut out);
                 assert_eq!(out, pooled);
                 assert!(out.windows(2).all(|p| p[0] <= p[1]), "in order: {out:?}");
                 *seen.entry(offspring_counts(&out, 5)).or_default() += 1;
@@ -423,8 +425,13 @@ mod tests {
             let mut scratch = vec![0.0; 6];
             let mut out = vec![usize::MAX; 100];
             let mut rng = stream_rng(2, 0);
-            let (s, p) = (Simd::Auto, Par::Seq);
-            split.draw(scheme, s, p, weights, 1, &mut rng, &mut scratch, &mut out);
+            let plan = BlockPlan {
+                scheme,
+                simd: Simd::Auto,
+                par: Par::Seq,
+                per_block: 1,
+            };
+            split.draw(plan, weights, &mut rng, &mut scratch, &mut out);
             assert!(out.iter().all(|&a| a == 2 || a == 3), "{scheme:?}: {out:?}");
             assert_eq!(split.starts, [0, 0, 100, 100], "{scheme:?}");
         }

@@ -34,7 +34,7 @@ pub use residual::Residual;
 pub use stratified::Stratified;
 pub use systematic::Systematic;
 
-pub(crate) use chunked::{BLOCK, Blocked, ChunkSplit, ChunkedWeights, chunks_per_block};
+pub(crate) use chunked::{BLOCK, BlockPlan, Blocked, ChunkSplit, ChunkedWeights, chunks_per_block};
 pub(crate) use offspring::{SCAN, prefix4_each};
 pub(crate) use stratified::stratified_index_in;
 #[cfg(test)]
