@@ -139,6 +139,8 @@ struct Scratch {
     /// Ancestors' states, then log-weights, then weights relative to the chunk maximum
     /// (`PAD` longer than a chunk).
     l: Vec<f64>,
+    /// Where this worker's walk stopped in this step (see [`WalkHint`]).
+    hint: WalkHint,
 }
 
 impl Scratch {
@@ -146,8 +148,28 @@ impl Scratch {
         Scratch {
             z: vec![0.0; c],
             l: vec![0.0; c + PAD],
+            hint: WalkHint::NONE,
         }
     }
+}
+
+/// Where a worker's walk stopped in this step: the output it would have written next, and
+/// the first particle of its last block, whose predecessors all have boundaries below that
+/// output. The worker's next chunk, which starts at that output, searches for its first
+/// ancestor from there, among lines the walk has just read, instead of over all N
+/// particles, whose lower levels of bisection miss the caches at N = 10⁷ (see
+/// [`gather_counted`]). Reset at every step, since it speaks of one step's weights.
+#[derive(Debug, Clone, Copy)]
+struct WalkHint {
+    next: usize,
+    from: usize,
+}
+
+impl WalkHint {
+    const NONE: WalkHint = WalkHint {
+        next: usize::MAX,
+        from: 0,
+    };
 }
 
 /// A chunk's random stream, on its own cache lines ([`LaneRng`] is 64-byte aligned), so
@@ -373,6 +395,9 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             let len = c.min(n);
             self.scratch.resize_with(groups, || Scratch::new(len));
         }
+        for s in &mut self.scratch {
+            s.hint = WalkHint::NONE;
+        }
         let ctx = StepCtx {
             model: &self.model,
             t,
@@ -567,11 +592,11 @@ fn chunk_step<M: ScalarModel>(
         // The ancestors' states land in `l` (free until the weights are computed).
         Source::Systematic(u) => {
             let k = |x: f64, a, b| ceil_index_in(x - u, a, b);
-            counted_propagate(ctx, k, lo, z, xs, &mut s.l);
+            counted_propagate(ctx, k, lo, z, xs, &mut s.l, &mut s.hint);
         }
         Source::Stratified(key) => {
             let k = |x, a, b| stratified_index_in(x, key, a, b);
-            counted_propagate(ctx, k, lo, z, xs, &mut s.l);
+            counted_propagate(ctx, k, lo, z, xs, &mut s.l, &mut s.hint);
         }
         Source::Given => {
             gather_propagate(model, t, ctx.x_old, &ctx.ancestors[lo..lo + len], z, xs);
@@ -698,11 +723,12 @@ fn counted_propagate<M: ScalarModel, K: Fn(f64, f64, f64) -> usize>(
     z: &[f64],
     xs: &mut [f64],
     l: &mut [f64],
+    hint: &mut WalkHint,
 ) {
     // Read through `ctx` inside the loop, the model and `t` kept LLVM from vectorising it
     // (13 % more instructions per particle-step, callgrind).
     let (len, model, t) = (xs.len(), ctx.model, ctx.t);
-    gather_counted(ctx, k, lo, len, &mut l[..len + PAD]);
+    gather_counted(ctx, k, lo, len, &mut l[..len + PAD], hint);
     for ((x, &z), &xp) in xs.iter_mut().zip(z).zip(&l[..len]) {
         *x = model.transition_from_normal(t, xp, z);
     }
@@ -754,7 +780,8 @@ const EXP_LANES: usize = 64;
 ///
 /// Output `i` descends from `A_i = #{j < N − 1 : k_j ≤ i}`, the first particle whose
 /// boundary `k_j` exceeds `i`; so particle `j` fills outputs `k_{j−1} … k_j − 1`. The first
-/// particle with a boundary above `lo` is found by bisection (`k` is non-decreasing); then
+/// particle with a boundary above `lo` is found by bisection (`k` is non-decreasing),
+/// bracketed by galloping up from `hint` when the worker's previous chunk ended at `lo`; then
 /// the particles are walked in order, their boundaries computed 64 at a time (a vectorised
 /// loop), and each particle's state is written four times at its first output with one
 /// vector store, the next particle starting at its own first output and overwriting the
@@ -769,9 +796,27 @@ fn gather_counted<M, K: Fn(f64, f64, f64) -> usize>(
     lo: usize,
     len: usize,
     out: &mut [f64],
+    hint: &mut WalkHint,
 ) {
     let n = ctx.n;
     let (mut a, mut b) = (0usize, n - 1);
+    if hint.next == lo && hint.from < n {
+        // Gallop up from where the worker's last walk stopped, to bracket the bisection.
+        a = hint.from;
+        let mut step = 1;
+        loop {
+            let probe = a + step;
+            if probe >= b {
+                break;
+            }
+            if boundary(ctx, &k, probe) > lo {
+                b = probe;
+                break;
+            }
+            a = probe + 1;
+            step *= 2;
+        }
+    }
     while a < b {
         let mid = (a + b) / 2;
         if boundary(ctx, &k, mid) > lo {
@@ -822,6 +867,10 @@ fn gather_counted<M, K: Fn(f64, f64, f64) -> usize>(
                 pos = k;
             }
             if pos >= len {
+                *hint = WalkHint {
+                    next: lo + len,
+                    from: j,
+                };
                 break 'walk;
             }
             j += m;
@@ -934,79 +983,102 @@ mod tests {
             for y in &ys[..3] {
                 f.step(*y).unwrap();
             }
-            // States equal to their indices, so the gathered states are the ancestors.
-            let index: Vec<f64> = (0..n).map(|j| j as f64).collect();
-            let ctx = StepCtx {
-                model: &f.model,
-                t: 3,
-                y: None,
-                n,
-                c: chunk,
-                log_uniform: 0.0,
-                source: Source::Identity,
-                x_old: &index,
-                lw_old: &f.lw,
-                cw_old: &f.cw,
-                offset: &f.offset,
-                scale: &f.scale,
-                n_over_total: n as f64 / f.total,
-                ancestors: &f.ancestors,
-                keep_lw: false,
-                prefetch: false,
-                per_group: 1,
-            };
-            // G_j N/T, from the global cumulative weights.
-            let pos: Vec<f64> = (0..n)
-                .map(|j| {
-                    let d = j / chunk;
-                    (f.offset[d] + f.scale[d] * f.cw[j]) * ctx.n_over_total
-                })
-                .collect();
-            // Ancestors by the chunks, with boundaries `k`.
-            let chunked = |k: &dyn Fn(f64, f64, f64) -> usize| {
-                let mut all = vec![0.0; n];
-                let mut out = vec![f64::NAN; chunk + PAD];
-                for (d, dst) in all.chunks_mut(chunk).enumerate() {
-                    let len = dst.len();
-                    gather_counted(&ctx, k, d * chunk, len, &mut out);
-                    dst.copy_from_slice(&out[..len]);
-                }
-                all.iter().map(|&a| a as usize).collect::<Vec<_>>()
-            };
-            // The merge: A_i = first j whose `x_j = G_j N/T` lies above point `i`, clamped
-            // to N − 1.
-            let merge = |below: &dyn Fn(usize, f64) -> bool| {
-                let mut j = 0;
-                (0..n)
-                    .map(|i| {
-                        while j + 1 < n && !below(i, pos[j]) {
-                            j += 1;
+            // The weights as the filter left them, and with runs of zero weights inside the
+            // chunks (long plateaus of equal boundaries, where a search can stop early).
+            for plateaus in [false, true] {
+                let mut cw = f.cw.clone();
+                if plateaus {
+                    for j in 1..n {
+                        if j % chunk != 0 && j % chunk != chunk - 1 && (j / 5) % 3 != 0 {
+                            cw[j] = cw[j - 1];
                         }
-                        j
-                    })
-                    .collect::<Vec<_>>()
-            };
-            for u in [0.0, 0.25, 0.731, 0.999_999] {
-                let k = |x: f64, a, b| ceil_index_in(x - u, a, b);
-                let below = |i: usize, x: f64| (i as f64) < x - u;
-                assert_eq!(
-                    chunked(&k),
-                    merge(&below),
-                    "N = {n}, chunk {chunk}, U = {u}"
-                );
-            }
-            for key in [0u64, 7, u64::MAX] {
-                let k = |x, a, b| stratified_index_in(x, key, a, b);
-                // Point i lies below x when i < ⌊x⌋, or i = ⌊x⌋ and U_i < x − i.
-                let below = |i: usize, x: f64| {
-                    let f = x.floor();
-                    (i as f64) < f || ((i as f64) == f && stratum_uniform(key, i as u64) < x - f)
+                    }
+                }
+                // States equal to their indices, so the gathered states are the ancestors.
+                let index: Vec<f64> = (0..n).map(|j| j as f64).collect();
+                let ctx = StepCtx {
+                    model: &f.model,
+                    t: 3,
+                    y: None,
+                    n,
+                    c: chunk,
+                    log_uniform: 0.0,
+                    source: Source::Identity,
+                    x_old: &index,
+                    lw_old: &f.lw,
+                    cw_old: &cw,
+                    offset: &f.offset,
+                    scale: &f.scale,
+                    n_over_total: n as f64 / f.total,
+                    ancestors: &f.ancestors,
+                    keep_lw: false,
+                    prefetch: false,
+                    per_group: 1,
                 };
-                assert_eq!(
-                    chunked(&k),
-                    merge(&below),
-                    "N = {n}, chunk {chunk}, key {key}"
-                );
+                // G_j N/T, from the global cumulative weights.
+                let pos: Vec<f64> = (0..n)
+                    .map(|j| {
+                        let d = j / chunk;
+                        (f.offset[d] + f.scale[d] * cw[j]) * ctx.n_over_total
+                    })
+                    .collect();
+                // Ancestors by the chunks, with boundaries `k`.
+                // With the walk's hint carried from chunk to chunk (as one worker runs them),
+                // or reset before each (a bisection over all N, as a worker's first chunk).
+                let chunked = |k: &dyn Fn(f64, f64, f64) -> usize, carry: bool| {
+                    let mut all = vec![0.0; n];
+                    let mut out = vec![f64::NAN; chunk + PAD];
+                    let mut hint = WalkHint::NONE;
+                    for (d, dst) in all.chunks_mut(chunk).enumerate() {
+                        if !carry {
+                            hint = WalkHint::NONE;
+                        }
+                        let len = dst.len();
+                        gather_counted(&ctx, k, d * chunk, len, &mut out, &mut hint);
+                        dst.copy_from_slice(&out[..len]);
+                    }
+                    all.iter().map(|&a| a as usize).collect::<Vec<_>>()
+                };
+                // The merge: A_i = first j whose `x_j = G_j N/T` lies above point `i`, clamped
+                // to N − 1.
+                let merge = |below: &dyn Fn(usize, f64) -> bool| {
+                    let mut j = 0;
+                    (0..n)
+                        .map(|i| {
+                            while j + 1 < n && !below(i, pos[j]) {
+                                j += 1;
+                            }
+                            j
+                        })
+                        .collect::<Vec<_>>()
+                };
+                for u in [0.0, 0.25, 0.731, 0.999_999] {
+                    let k = |x: f64, a, b| ceil_index_in(x - u, a, b);
+                    let below = |i: usize, x: f64| (i as f64) < x - u;
+                    for carry in [false, true] {
+                        assert_eq!(
+                            chunked(&k, carry),
+                            merge(&below),
+                            "N = {n}, chunk {chunk}, U = {u}, plateaus {plateaus}, hint carried: {carry}"
+                        );
+                    }
+                }
+                for key in [0u64, 7, u64::MAX] {
+                    let k = |x, a, b| stratified_index_in(x, key, a, b);
+                    // Point i lies below x when i < ⌊x⌋, or i = ⌊x⌋ and U_i < x − i.
+                    let below = |i: usize, x: f64| {
+                        let f = x.floor();
+                        (i as f64) < f
+                            || ((i as f64) == f && stratum_uniform(key, i as u64) < x - f)
+                    };
+                    for carry in [false, true] {
+                        assert_eq!(
+                            chunked(&k, carry),
+                            merge(&below),
+                            "N = {n}, chunk {chunk}, key {key}, plateaus {plateaus}, hint carried: {carry}"
+                        );
+                    }
+                }
             }
         }
     }
