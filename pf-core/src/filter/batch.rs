@@ -800,7 +800,7 @@ fn gather_counted<M, K: Fn(f64, f64, f64) -> usize>(
 ) {
     let n = ctx.n;
     let (mut a, mut b) = (0usize, n - 1);
-    if hint.next == lo && hint.from < n {
+    if hint.next == lo {
         // Gallop up from where the worker's last walk stopped, to bracket the bisection.
         a = hint.from;
         let mut step = 1;
@@ -983,6 +983,8 @@ mod tests {
             for y in &ys[..3] {
                 f.step(*y).unwrap();
             }
+            // States equal to their indices, so the gathered states are the ancestors.
+            let index: Vec<f64> = (0..n).map(|j| j as f64).collect();
             // The weights as the filter left them, and with runs of zero weights inside the
             // chunks (long plateaus of equal boundaries, where a search can stop early).
             for plateaus in [false, true] {
@@ -994,8 +996,6 @@ mod tests {
                         }
                     }
                 }
-                // States equal to their indices, so the gathered states are the ancestors.
-                let index: Vec<f64> = (0..n).map(|j| j as f64).collect();
                 let ctx = StepCtx {
                     model: &f.model,
                     t: 3,
@@ -1022,9 +1022,9 @@ mod tests {
                         (f.offset[d] + f.scale[d] * cw[j]) * ctx.n_over_total
                     })
                     .collect();
-                // Ancestors by the chunks, with boundaries `k`.
-                // With the walk's hint carried from chunk to chunk (as one worker runs them),
-                // or reset before each (a bisection over all N, as a worker's first chunk).
+                // Ancestors by the chunks, with boundaries `k`, the walk's hint carried from
+                // chunk to chunk (as one worker runs them) or reset before each (a bisection
+                // over all N, as a worker's first chunk).
                 let chunked = |k: &dyn Fn(f64, f64, f64) -> usize, carry: bool| {
                     let mut all = vec![0.0; n];
                     let mut out = vec![f64::NAN; chunk + PAD];
