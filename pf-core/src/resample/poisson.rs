@@ -62,7 +62,7 @@ impl Thresholds {
 
 /// The per-thread buffers of the Poisson draws, reused from call to call (no allocation
 /// once grown; every call overwrites what it reads).
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub(crate) struct DrawBuffers {
     /// Each particle's count.
     pub(crate) counts: Vec<usize>,
