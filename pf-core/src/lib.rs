@@ -24,6 +24,7 @@
 //! | [`metrics`] | RMSE, REC curves, residual summaries |
 
 pub mod ancestry;
+mod buffer;
 pub mod error;
 pub mod filter;
 pub mod gaussian;

@@ -32,6 +32,7 @@
 //! unbiasedness of the likelihood estimate against the Kalman filter's exact value).
 
 use super::{ResamplePolicy, RunSummary, StepReport};
+use crate::buffer::ParticleBuf;
 use crate::error::{CoreError, Result};
 use crate::mc::{Par, PfRng, stream_rng};
 use crate::resample::{
@@ -180,19 +181,19 @@ type ChunkRng = LaneRng;
 pub struct BatchBootstrap<M> {
     model: M,
     cfg: BatchConfig,
-    x: Vec<f64>,
-    x_new: Vec<f64>,
+    x: ParticleBuf<f64>,
+    x_new: ParticleBuf<f64>,
     /// Normalised `log W` (only maintained when the policy may skip resampling).
-    lw: Vec<f64>,
-    lw_new: Vec<f64>,
+    lw: ParticleBuf<f64>,
+    lw_new: ParticleBuf<f64>,
     /// Cumulative weights within each chunk, relative to the chunk's maximum.
-    cw: Vec<f64>,
-    cw_new: Vec<f64>,
+    cw: ParticleBuf<f64>,
+    cw_new: ParticleBuf<f64>,
     /// Ancestors from the schemes that resample before the pass (multinomial, residual).
-    ancestors: Vec<usize>,
+    ancestors: ParticleBuf<usize>,
     /// The blocks' weights, normalised globally (residual) or within the block
     /// (multinomial).
-    w_norm: Vec<f64>,
+    w_norm: ParticleBuf<f64>,
     /// The multinomial split's scratch.
     split: ChunkSplit,
     rngs: Vec<ChunkRng>,
@@ -276,14 +277,14 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         let mut f = BatchBootstrap {
             model,
             cfg,
-            x: vec![0.0; n],
-            x_new: vec![0.0; n],
-            lw: vec![0.0; n],
-            lw_new: vec![0.0; n],
-            cw: vec![0.0; n],
-            cw_new: vec![0.0; n],
-            ancestors: vec![0; n],
-            w_norm: vec![0.0; n],
+            x: ParticleBuf::zeroed(n),
+            x_new: ParticleBuf::zeroed(n),
+            lw: ParticleBuf::zeroed(n),
+            lw_new: ParticleBuf::zeroed(n),
+            cw: ParticleBuf::zeroed(n),
+            cw_new: ParticleBuf::zeroed(n),
+            ancestors: ParticleBuf::zeroed(n),
+            w_norm: ParticleBuf::zeroed(n),
             split: ChunkSplit::default(),
             rngs: Vec::with_capacity(chunks),
             master: stream_rng(cfg.seed, u64::MAX),
@@ -988,7 +989,7 @@ mod tests {
             // The weights as the filter left them, and with runs of zero weights inside the
             // chunks (long plateaus of equal boundaries, where a search can stop early).
             for plateaus in [false, true] {
-                let mut cw = f.cw.clone();
+                let mut cw = f.cw.to_vec();
                 if plateaus {
                     for j in 1..n {
                         if j % chunk != 0 && j % chunk != chunk - 1 && (j / 5) % 3 != 0 {
