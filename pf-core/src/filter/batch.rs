@@ -19,10 +19,12 @@
 //! ([`crate::simd`]). So a chunk touches main memory in bursts (its walk reads, its
 //! outputs' stores); from `N = 2¹⁸`, where the arrays outgrow the caches, it prefetches its
 //! walk two blocks ahead and, during its `exp`, the next chunk's outputs, so that those
-//! bursts find their lines in cache. Afterwards, a pass over the chunk summaries (not the
-//! particles) reconciles the chunk maxima: chunk `d`'s weights are scaled by `exp(m_d − max)` and
-//! offset by the chunks before it, which gives the global cumulative weights, the
-//! likelihood increment and the ESS.
+//! bursts find their lines in cache. Arrays of 2 MiB or more are mapped on 2 MiB pages
+//! where Linux gives them (`buffer::ParticleBuf`): the 32 MiB of a step at N = 10⁶ then
+//! take 16 TLB entries instead of 8192 (about 4 % faster there). Afterwards, a pass over
+//! the chunk summaries (not the particles) reconciles the chunk maxima: chunk `d`'s
+//! weights are scaled by `exp(m_d − max)` and offset by the chunks before it, which gives
+//! the global cumulative weights, the likelihood increment and the ESS.
 //!
 //! Chunks, streams and the order of every reduction are fixed by `N` and the chunk size,
 //! not by the number of threads or by the instruction set, so [`Par::Seq`] and
