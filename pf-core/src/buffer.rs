@@ -20,9 +20,11 @@ const HUGE_MIN_BYTES: usize = 2 << 20;
 /// A zero-initialised array of `T` that derefs to `[T]`. Of 2 MiB or more it is an
 /// anonymous mapping of its own, advised with `MADV_HUGEPAGE` before its first write, so
 /// that Linux backs it with transparent huge pages where it has them (in the `madvise`
-/// mode that many distributions default to, the advice is what turns them on). Anywhere
-/// else, or if the mapping fails, it is an ordinary `Vec`. The values are the same either
-/// way; only the speed differs.
+/// mode that many distributions default to, the advice is what turns them on; kernels
+/// before 6.7 may place the mapping off a 2 MiB boundary and leave its ends on small
+/// pages). Off Linux the mapping goes without the advice; below 2 MiB, or if the mapping
+/// fails, the array is an ordinary `Vec`. The values are the same either way; only the
+/// speed differs.
 ///
 /// (Asking glibc for huge pages for its whole heap, `GLIBC_TUNABLES=glibc.malloc.hugetlb=1`,
 /// does the same but needs the user to set it; advising each `Vec` before its first write
@@ -96,6 +98,7 @@ mod tests {
             assert!(b.iter().enumerate().all(|(i, &x)| x == i as f64));
             let u = ParticleBuf::<usize>::zeroed(n);
             assert_eq!(u.len(), n);
+            assert!(u.iter().all(|&a| a == 0));
         }
         let large = ParticleBuf::<f64>::zeroed(HUGE_MIN_BYTES / 8);
         assert!(matches!(large.store, Store::Mapped(_)));
