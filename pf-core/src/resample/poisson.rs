@@ -95,8 +95,12 @@ pub(crate) fn distinct_sorted<R: Rng + ?Sized>(
     out: &mut Vec<usize>,
 ) {
     debug_assert!(d <= t);
+    // With room to spare: the next calls' random totals differ a little, and without it
+    // every new high reallocated (once grown, a step allocates nothing; tested).
+    let words = t.div_ceil(64);
     seen.clear();
-    seen.resize(t.div_ceil(64), 0);
+    seen.reserve(words + words / 8 + 1);
+    seen.resize(words, 0);
     let mut found = 0;
     while found < d {
         let i = rng.random_range(0..t);
@@ -105,6 +109,7 @@ pub(crate) fn distinct_sorted<R: Rng + ?Sized>(
         seen[i / 64] |= bit;
     }
     out.clear();
+    out.reserve(2 * d + 64);
     for (w, &word) in seen.iter().enumerate() {
         out.extend(set_bits(word).map(|b| w * 64 + b));
     }

@@ -1,0 +1,165 @@
+//! The filters' steps and the resamplers keep allocation out of their loops: every
+//! allocation on this test's thread is counted, through a counting global allocator.
+//!
+//! - Systematic and stratified resampling need no buffer that depends on the draws: once a
+//!   filter has stepped, no later step allocates.
+//! - Multinomial and residual resampling keep per-thread buffers sized by random totals
+//!   (the Poisson total `T` and the surplus `T − M` removed from it), which can grow when a
+//!   total sets a new high. Each growth at least doubles a buffer, and neither needs more
+//!   than `2M + 64` slots while `T ≤ 2M`, so over any number of steps they grow at most
+//!   `2·log₂(2M + 64)` times in all: far fewer than one allocation per step, which is what
+//!   the test rules out (it runs 200 steps).
+//!
+//! Everything runs on the test's own thread (`Par::Seq`), and only that thread's
+//! allocations are counted, so the other tests of this binary cannot disturb the count.
+
+// A global allocator can only be written with `unsafe` (the trait is unsafe to implement);
+// this one forwards every call to `System` unchanged.
+#![allow(unsafe_code)]
+
+use pf_core::filter::{BatchBootstrap, BatchConfig, FilterConfig, ParticleFilter};
+use pf_core::mc::{Par, stream_rng};
+use pf_core::models::NoisyAr1;
+use pf_core::resample::{Resample, Resampler};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+/// The system allocator, counting the calls made on threads that asked to be counted.
+struct Counting;
+
+thread_local! {
+    /// `Some(n)`: this thread is counting, and has allocated `n` times so far.
+    static COUNT: Cell<Option<usize>> = const { Cell::new(None) };
+}
+
+fn note() {
+    // `try_with`: allocations during a thread's teardown find no thread-local.
+    let _ = COUNT.try_with(|c| c.set(c.get().map(|n| n + 1)));
+}
+
+// SAFETY: every method forwards its arguments unchanged to `System`, which upholds the
+// `GlobalAlloc` contract; counting touches only a thread-local `Cell`, never the heap.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note();
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        note();
+        unsafe { System.alloc_zeroed(layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note();
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+/// How many times `f` allocates on this thread.
+fn allocations(f: impl FnOnce()) -> usize {
+    COUNT.with(|c| c.set(Some(0)));
+    f();
+    COUNT.with(|c| c.replace(None)).expect("counting was on")
+}
+
+fn observations(n: usize) -> Vec<Option<f64>> {
+    let model = NoisyAr1::new(0.98, 0.2, 1.0).expect("valid parameters");
+    let (_, ys) = model.simulate(n - 1, &mut stream_rng(1, 0));
+    ys.into_iter().map(Some).collect()
+}
+
+/// Steps counted after the warm-up.
+const STEPS: usize = 200;
+
+/// The most allocations `STEPS` steps may make with `m` draws per step (see the module
+/// docs): none for systematic and stratified resampling, at most `2·log₂(2m + 64)` for
+/// multinomial and residual.
+fn allowed(resampler: Resampler, m: usize) -> usize {
+    match resampler {
+        Resampler::Systematic | Resampler::Stratified => 0,
+        Resampler::Multinomial | Resampler::Residual => 2 * (2 * m + 64).ilog2() as usize + 2,
+    }
+}
+
+/// The batch filter, with every scheme, in one block and split into several (N ≥ 2¹⁵, the
+/// multinomial and residual draws in blocks).
+#[test]
+fn batch_filter_steps_keep_allocation_out() {
+    let ys = observations(STEPS + 2);
+    let model = NoisyAr1::new(0.98, 0.2, 1.0).expect("valid parameters");
+    for n in [3_000usize, 40_000] {
+        for resampler in Resampler::ALL {
+            let cfg = BatchConfig {
+                resampler,
+                par: Par::Seq,
+                ..BatchConfig::new(n, 3)
+            };
+            let mut f = BatchBootstrap::new(model, cfg).expect("valid config");
+            for &y in &ys[..2] {
+                f.step(y).expect("step runs");
+            }
+            let count = allocations(|| {
+                for &y in &ys[2..] {
+                    f.step(y).expect("step runs");
+                }
+            });
+            assert!(
+                count <= allowed(resampler, n),
+                "N = {n}, {resampler}: {count}"
+            );
+        }
+    }
+}
+
+/// The generic filter with a scalar state, every scheme.
+#[test]
+fn generic_filter_steps_keep_allocation_out() {
+    let ys = observations(STEPS + 2);
+    let model = NoisyAr1::new(0.98, 0.2, 1.0).expect("valid parameters");
+    for resampler in Resampler::ALL {
+        let cfg = FilterConfig {
+            resampler,
+            ..FilterConfig::new(2_000)
+        };
+        let mut pf = ParticleFilter::bootstrap(model, cfg).expect("valid config");
+        let mut rng = stream_rng(4, 0);
+        for y in &ys[..2] {
+            pf.step(None, y.as_ref(), &mut rng).expect("step runs");
+        }
+        let count = allocations(|| {
+            for y in &ys[2..] {
+                pf.step(None, y.as_ref(), &mut rng).expect("step runs");
+            }
+        });
+        assert!(count <= allowed(resampler, 2_000), "{resampler}: {count}");
+    }
+}
+
+/// Each resampler, called again and again on the same weights.
+#[test]
+fn resamplers_keep_allocation_out() {
+    let raw: Vec<f64> = (0..5_000)
+        .map(|i| ((i * 7919) % 101) as f64 + 0.5)
+        .collect();
+    let total: f64 = raw.iter().sum();
+    let w: Vec<f64> = raw.iter().map(|x| x / total).collect();
+    let mut out = vec![0usize; w.len()];
+    let mut rng = stream_rng(5, 0);
+    for resampler in Resampler::ALL {
+        resampler.resample(&w, &mut rng, &mut out);
+        let count = allocations(|| {
+            for _ in 0..STEPS {
+                resampler.resample(&w, &mut rng, &mut out);
+            }
+        });
+        assert!(count <= allowed(resampler, w.len()), "{resampler}: {count}");
+    }
+}
