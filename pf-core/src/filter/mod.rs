@@ -18,7 +18,7 @@ mod policy;
 mod report;
 mod sir;
 
-pub use batch::{BatchBootstrap, BatchConfig, ScalarModel};
+pub use batch::{BatchBootstrap, BatchConfig, ScalarModel, default_chunk};
 pub use mutation::{Bootstrap, Guided, Mutation};
 pub use policy::{EssThreshold, ResamplePolicy};
 pub use report::{RunSummary, StepReport};
