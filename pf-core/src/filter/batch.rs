@@ -97,17 +97,17 @@ impl BatchConfig {
 }
 
 /// The chunk size [`BatchConfig::new`] gives `n` particles: 2048 while the arrays stay in
-/// the caches, 8192 from `N = 2¹⁸`, where they do not.
+/// the caches; 8192 from `N = 2¹⁸`, where they do not (and the prefetches start).
 ///
-/// Out of the caches a chunk pays for its memory in bursts (the first ancestor's search, the
-/// prefetches' first lines, its stream's state), and larger chunks pay for them less often:
+/// Out of the caches a chunk pays for its memory in bursts (the first ancestor's search,
+/// the prefetches' first lines, its stream's state), and larger chunks pay less often:
 /// criterion A/B on huge pages (2026-11-25, 08:45–08:55 UTC), 8192 against 2048 at
 /// N = 10⁶, 4.35–4.66 against 4.63–5.01 ns per particle-step on one thread and 2.46–2.58
 /// against 2.66–3.03 on two (three rounds), every resampling scheme 2–18 % faster, and at
 /// 10⁷ 0.49 against 0.53 s on two threads (one thread mixed). In the caches the smaller
-/// chunk keeps its scratch in L1 and L2, and balances better over two threads (at 10⁵ on
-/// two threads, 8192 took 2.74–2.95 ns against 2.48–2.62 in the scratch harness). The chunk fixes the
-/// streams, so the two sizes give different (equally valid) draws.
+/// chunk keeps its scratch in L1 and L2 and balances better over two threads (at 10⁵ on
+/// two threads, 8192 took 2.74–2.95 ns against 2.48–2.62 in the scratch harness). The
+/// chunk fixes the streams, so the two sizes give different (equally valid) draws.
 pub fn default_chunk(n: usize) -> usize {
     if n >= PREFETCH_MIN { 8192 } else { 2048 }
 }
