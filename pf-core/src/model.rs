@@ -10,7 +10,8 @@
 
 use rand::Rng;
 
-/// A state-space model `X_0 ~ μ`, `X_t | X_{t−1} ~ f_t(· | X_{t−1}, u_t)`, `Y_t | X_t ~ g_t(· | X_t)`.
+/// A state-space model `X_0 ~ μ`, `X_t | X_{t−1} ~ f_t(· | X_{t−1}, u_t)`,
+/// `Y_t | X_t ~ g_t(· | X_t)`.
 ///
 /// Every stochastic method takes the RNG as an argument; models never store one.
 pub trait StateSpaceModel: Sync {

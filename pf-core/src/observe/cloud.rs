@@ -33,7 +33,8 @@ impl<S> CloudRecorder<S> {
         Self::default()
     }
 
-    /// The positions of each recorded step, as [`Genealogy::trajectory`](crate::genealogy::Genealogy::trajectory) wants them.
+    /// The positions of each recorded step, as
+    /// [`Genealogy::trajectory`](crate::genealogy::Genealogy::trajectory) wants them.
     pub fn positions(&self) -> Vec<Vec<S>>
     where
         S: Clone,

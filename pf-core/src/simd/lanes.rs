@@ -223,8 +223,8 @@ fn exp1_candidate(z: &Ziggurat, b: u64) -> f64 {
     if x < z.x[i + 1] { x } else { f64::NAN }
 }
 
-/// The ziggurat for the standard normal (as in `rand_distr`), started from the 64-bit draw `b`, with
-/// further uniforms from `rng`.
+/// The ziggurat for the standard normal (as in `rand_distr`), started from the 64-bit draw
+/// `b`, with further uniforms from `rng`.
 #[cold]
 fn normal_continue(z: &Ziggurat, mut b: u64, rng: &mut PfRng) -> f64 {
     loop {
