@@ -60,8 +60,9 @@ impl Thresholds {
     }
 }
 
-/// The per-thread buffers of the Poisson draws, reused from call to call (no allocation
-/// once grown; every call overwrites what it reads).
+/// The per-thread buffers of the Poisson draws, reused from call to call: every call
+/// overwrites what it reads, and a buffer grows only when a call's random totals need more
+/// than any call before (rarely, and by doubling; see [`distinct_sorted`]).
 #[derive(Debug)]
 pub(crate) struct DrawBuffers {
     /// Each particle's count.
