@@ -7,7 +7,9 @@ use criterion::measurement::WallTime;
 use criterion::{
     BenchmarkGroup, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main,
 };
+use nalgebra::{DMatrix, DVector};
 use pf_core::filter::{BatchBootstrap, BatchConfig, FilterConfig, ParticleFilter};
+use pf_core::kalman::LinearGaussian;
 use pf_core::mc::Par;
 use pf_core::mc::stream_rng;
 use pf_core::models::NoisyAr1;
@@ -112,5 +114,51 @@ fn batch_schemes(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bootstrap, batch, batch_large, batch_schemes);
+/// The generic filter with a heap-allocated state: a constant-velocity model (position and
+/// velocity, `nalgebra::DVector`) observed in position, 100 steps. What a model written
+/// with dynamic vectors pays per particle-step.
+fn linear_gaussian(c: &mut Criterion) {
+    const LG_STEPS: usize = 100;
+    let model = LinearGaussian::new(
+        DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 0.0, 1.0]),
+        None,
+        DMatrix::from_row_slice(1, 2, &[1.0, 0.0]),
+        DMatrix::from_row_slice(2, 2, &[0.25, 0.5, 0.5, 1.0]) * 0.01
+            + DMatrix::identity(2, 2) * 1e-4,
+        DMatrix::from_element(1, 1, 1.0),
+        DVector::zeros(2),
+        DMatrix::identity(2, 2),
+    )
+    .expect("valid model");
+    let ys: Vec<Option<DVector<f64>>> = (0..LG_STEPS)
+        .map(|k| Some(DVector::from_element(1, 0.3 * k as f64)))
+        .collect();
+    let mut group = c.benchmark_group("bootstrap_linear_gaussian");
+    group.sample_size(10);
+    for n in [1_000usize, 10_000] {
+        group.throughput(Throughput::Elements((n * LG_STEPS) as u64));
+        let mut pf =
+            ParticleFilter::bootstrap(model.clone(), FilterConfig::new(n)).expect("valid config");
+        let mut rng = stream_rng(2, 0);
+        group.bench_function(BenchmarkId::new("systematic", format!("N={n}")), |b| {
+            b.iter(|| {
+                black_box(
+                    pf.run(&ys, None, &mut rng, &mut ())
+                        .expect("filter runs")
+                        .log_lik,
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    bootstrap,
+    batch,
+    batch_large,
+    batch_schemes,
+    linear_gaussian
+);
 criterion_main!(benches);

@@ -34,6 +34,23 @@ pub trait StateSpaceModel: Sync {
         rng: &mut R,
     ) -> Self::State;
 
+    /// Draw `X_t ~ f_t(· | x_prev, u)` into `out`, whose earlier value is overwritten.
+    ///
+    /// The filters call this one. Override it when the state owns heap memory (a
+    /// `DVector`, a `Vec`), so that a step reuses each particle's storage instead of
+    /// allocating; the default assigns [`sample_transition`](Self::sample_transition)'s
+    /// result.
+    fn sample_transition_into<R: Rng + ?Sized>(
+        &self,
+        t: usize,
+        x_prev: &Self::State,
+        u: Option<&Self::Input>,
+        rng: &mut R,
+        out: &mut Self::State,
+    ) {
+        *out = self.sample_transition(t, x_prev, u, rng);
+    }
+
     /// `log g_t(y | x)`. May return `−∞`; must not return NaN for valid `x`.
     fn log_likelihood(&self, t: usize, x: &Self::State, y: &Self::Obs) -> f64;
 }

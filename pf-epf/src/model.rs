@@ -8,7 +8,7 @@
 //! `V ~ N(0, r²·I)`.
 
 use crate::geometry::Vec2;
-use pf_core::filter::Mutation;
+use pf_core::filter::{Mutation, StepAt};
 use pf_core::{StateSpaceModel, TransitionDensity};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -97,21 +97,22 @@ impl Mutation<TargetModel> for OptimalProposal {
     fn mutate<R: Rng + ?Sized>(
         &self,
         model: &TargetModel,
-        t: usize,
+        at: StepAt<'_, TargetModel>,
         x_prev: &Vec2,
-        u: Option<&Drift>,
-        y: Option<&Vec2>,
+        x: &mut Vec2,
         rng: &mut R,
-    ) -> (Vec2, f64) {
-        let Some(y) = y else {
-            return (model.sample_transition(t, x_prev, u, rng), 0.0);
+    ) -> f64 {
+        let Some(y) = at.y else {
+            *x = model.sample_transition(at.t, x_prev, at.u, rng);
+            return 0.0;
         };
-        let (m, p) = model.prior(x_prev, u);
+        let (m, p) = model.prior(x_prev, at.u);
         let r2 = model.r * model.r;
         let s = p + r2;
         let mean = (m * r2 + y * p) / s;
         let var = p * r2 / s;
-        (mean + normal2(rng) * var.sqrt(), log_normal2(y, &m, s))
+        *x = mean + normal2(rng) * var.sqrt();
+        log_normal2(y, &m, s)
     }
 }
 
@@ -134,8 +135,13 @@ mod tests {
             dt: 4.0,
         };
         let (xp, y) = (Vec2::new(1.0, 1.0), Vec2::new(5.0, 2.0));
-        let (x, lw) =
-            OptimalProposal.mutate(&model, 1, &xp, Some(&u), Some(&y), &mut stream_rng(0, 0));
+        let at = StepAt {
+            t: 1,
+            u: Some(&u),
+            y: Some(&y),
+        };
+        let mut x = Vec2::zeros();
+        let lw = OptimalProposal.mutate(&model, at, &xp, &mut x, &mut stream_rng(0, 0));
         let (m, p) = model.prior(&xp, Some(&u));
         let s = p + 4.0;
         let log_q = log_normal2(&x, &((m * 4.0 + y * p) / s), p * 4.0 / s);

@@ -10,6 +10,9 @@
 //!   so over any number of steps each grows at most `1 + log₂(4M + 64)` times: far fewer
 //!   than one allocation per step, which is what the test rules out (it runs 200 steps).
 //!
+//! - A state that owns heap memory (a `DVector`) is written into the particles' own
+//!   storage, from the second move on.
+//!
 //! Everything runs on the test's own thread (`Par::Seq`), and only that thread's
 //! allocations are counted, so the other tests of this binary cannot disturb the count.
 
@@ -17,7 +20,9 @@
 // this one forwards every call to `System` unchanged.
 #![allow(unsafe_code)]
 
+use nalgebra::{DMatrix, DVector};
 use pf_core::filter::{BatchBootstrap, BatchConfig, FilterConfig, ParticleFilter};
+use pf_core::kalman::LinearGaussian;
 use pf_core::mc::{Par, stream_rng};
 use pf_core::models::NoisyAr1;
 use pf_core::resample::{Resample, Resampler};
@@ -140,6 +145,43 @@ fn generic_filter_steps_keep_allocation_out() {
             }
         });
         assert!(count <= allowed(resampler, 2_000), "{resampler}: {count}");
+    }
+}
+
+/// The generic filter with a state that owns heap memory (`DVector`, a constant-velocity
+/// model): each step writes into the particles' own storage and the densities use
+/// per-thread scratch vectors, so a step allocates no more than with a scalar state.
+#[test]
+fn generic_filter_with_vector_states_keeps_allocation_out() {
+    let model = LinearGaussian::new(
+        DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 0.0, 1.0]),
+        None,
+        DMatrix::from_row_slice(1, 2, &[1.0, 0.0]),
+        DMatrix::from_row_slice(2, 2, &[0.02, 0.01, 0.01, 0.02]),
+        DMatrix::from_element(1, 1, 1.0),
+        DVector::zeros(2),
+        DMatrix::identity(2, 2),
+    )
+    .expect("valid model");
+    let ys: Vec<Option<DVector<f64>>> = (0..STEPS + 2)
+        .map(|k| Some(DVector::from_element(1, 0.3 * k as f64)))
+        .collect();
+    for resampler in Resampler::ALL {
+        let cfg = FilterConfig {
+            resampler,
+            ..FilterConfig::new(500)
+        };
+        let mut pf = ParticleFilter::bootstrap(model.clone(), cfg).expect("valid config");
+        let mut rng = stream_rng(6, 0);
+        for y in &ys[..2] {
+            pf.step(None, y.as_ref(), &mut rng).expect("step runs");
+        }
+        let count = allocations(|| {
+            for y in &ys[2..] {
+                pf.step(None, y.as_ref(), &mut rng).expect("step runs");
+            }
+        });
+        assert!(count <= allowed(resampler, 500), "{resampler}: {count}");
     }
 }
 

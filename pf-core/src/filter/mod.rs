@@ -19,7 +19,7 @@ mod report;
 mod sir;
 
 pub use batch::{BatchBootstrap, BatchConfig, ScalarModel, default_chunk};
-pub use mutation::{Bootstrap, Guided, Mutation};
+pub use mutation::{Bootstrap, Guided, Mutation, StepAt};
 pub use policy::{EssThreshold, ResamplePolicy};
 pub use report::{RunSummary, StepReport};
 pub use sir::{FilterConfig, ParticleFilter};

@@ -7,18 +7,41 @@
 use crate::model::{Proposal, StateSpaceModel, TransitionDensity};
 use rand::Rng;
 
+/// Where a particle moves: the index `t` of the state being drawn, the input `u_t` and the
+/// observation `y_t` (`None` when missing), the same for every particle of a step.
+#[derive(Debug)]
+pub struct StepAt<'a, M: StateSpaceModel> {
+    /// Index of the state being drawn.
+    pub t: usize,
+    /// The input `u_t`.
+    pub u: Option<&'a M::Input>,
+    /// The observation `y_t`.
+    pub y: Option<&'a M::Obs>,
+}
+
+// By hand: a derive would ask `M: Copy`, and the fields are references and an index.
+impl<M: StateSpaceModel> Clone for StepAt<'_, M> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<M: StateSpaceModel> Copy for StepAt<'_, M> {}
+
 /// Move one particle and return its incremental log-weight.
 pub trait Mutation<M: StateSpaceModel>: Sync {
-    /// Draw `ξ_t` given `ξ_{t−1} = x_prev` and return `(ξ_t, log w̃_t)`.
+    /// Draw `ξ_t` given `ξ_{t−1} = x_prev` into `x` and return `log w̃_t`.
+    ///
+    /// `x` holds an earlier state (its value is to be overwritten, not read): writing into it
+    /// lets a state that owns heap memory reuse it, so a step need not allocate per particle.
     fn mutate<R: Rng + ?Sized>(
         &self,
         model: &M,
-        t: usize,
+        at: StepAt<'_, M>,
         x_prev: &M::State,
-        u: Option<&M::Input>,
-        y: Option<&M::Obs>,
+        x: &mut M::State,
         rng: &mut R,
-    ) -> (M::State, f64);
+    ) -> f64;
 
     /// Whether a step with no observation still changes the weights (a guided proposal's
     /// `f/q` does; the bootstrap filter's does not, so its weights are carried exactly).
@@ -45,19 +68,20 @@ impl<M: StateSpaceModel> Mutation<M> for Bootstrap {
     fn mutate<R: Rng + ?Sized>(
         &self,
         model: &M,
-        t: usize,
+        at: StepAt<'_, M>,
         x_prev: &M::State,
-        u: Option<&M::Input>,
-        y: Option<&M::Obs>,
+        x: &mut M::State,
         rng: &mut R,
-    ) -> (M::State, f64) {
-        let x = model.sample_transition(t, x_prev, u, rng);
-        let lw = y.map_or(0.0, |y| model.log_likelihood(t, &x, y));
-        (x, lw)
+    ) -> f64 {
+        model.sample_transition_into(at.t, x_prev, at.u, rng, x);
+        at.y.map_or(0.0, |y| model.log_likelihood(at.t, x, y))
     }
 }
 
 /// A guided filter: `ξ_t ~ q_t`, weight `g_t(y_t|ξ_t) f_t(ξ_t|ξ_{t−1}) / q_t(ξ_t|ξ_{t−1}, y_t)`.
+///
+/// [`Proposal::sample`] returns the state by value, so a state that owns heap memory costs
+/// an allocation per particle here (the bootstrap filter reuses the state's own).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Guided<P>(pub P);
 
@@ -65,16 +89,16 @@ impl<M: TransitionDensity, P: Proposal<M>> Mutation<M> for Guided<P> {
     fn mutate<R: Rng + ?Sized>(
         &self,
         model: &M,
-        t: usize,
+        at: StepAt<'_, M>,
         x_prev: &M::State,
-        u: Option<&M::Input>,
-        y: Option<&M::Obs>,
+        x: &mut M::State,
         rng: &mut R,
-    ) -> (M::State, f64) {
-        let x = self.0.sample(model, t, x_prev, u, y, rng);
-        let log_g = y.map_or(0.0, |y| model.log_likelihood(t, &x, y));
-        let log_f = model.log_transition_density(t, x_prev, &x, u);
-        let log_q = self.0.log_density(model, t, x_prev, &x, u, y);
-        (x, log_g + log_f - log_q)
+    ) -> f64 {
+        let StepAt { t, u, y } = at;
+        *x = self.0.sample(model, t, x_prev, u, y, rng);
+        let log_g = y.map_or(0.0, |y| model.log_likelihood(t, x, y));
+        let log_f = model.log_transition_density(t, x_prev, x, u);
+        let log_q = self.0.log_density(model, t, x_prev, x, u, y);
+        log_g + log_f - log_q
     }
 }

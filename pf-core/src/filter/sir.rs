@@ -1,6 +1,6 @@
 //! The SIR particle filter: owns the particle set and its buffers.
 
-use super::{Bootstrap, Mutation, ResamplePolicy, RunSummary, StepReport};
+use super::{Bootstrap, Mutation, ResamplePolicy, RunSummary, StepAt, StepReport};
 use crate::error::{CoreError, Result};
 use crate::model::{EuclideanState, StateSpaceModel};
 use crate::observe::{Observer, StepView};
@@ -191,9 +191,9 @@ impl<M: StateSpaceModel, P: Mutation<M>, Rs: Resample> ParticleFilter<M, P, Rs> 
     ) -> Result<StepReport> {
         let n = self.n;
         let log_n = (n as f64).ln();
-        self.x_next.clear();
         let (t, resampled, prior_log_lik) = match self.last {
             None => {
+                self.x_next.clear();
                 for (i, lw) in self.log_w_next.iter_mut().enumerate() {
                     let x0 = self.model.sample_initial(rng);
                     *lw = self.mutation.initial_log_weight(&self.model, &x0, y) - log_n;
@@ -213,12 +213,17 @@ impl<M: StateSpaceModel, P: Mutation<M>, Rs: Resample> ParticleFilter<M, P, Rs> 
                         *a = i;
                     }
                 }
+                if self.x_next.len() != n {
+                    // The first move: storage for the new states, reused from then on.
+                    self.x_next.clone_from(&self.x);
+                }
+                let at = StepAt { t, u, y };
                 for i in 0..n {
                     let a = self.ancestors_next[i];
-                    let (x, lw) = self.mutation.mutate(&self.model, t, &self.x[a], u, y, rng);
+                    let x = &mut self.x_next[i];
+                    let lw = self.mutation.mutate(&self.model, at, &self.x[a], x, rng);
                     let prior = if resample { -log_n } else { self.log_w[i] };
                     self.log_w_next[i] = prior + lw;
-                    self.x_next.push(x);
                 }
                 (t, resample, last.log_lik)
             }

@@ -11,6 +11,8 @@
 
 use nalgebra::{DMatrix, DVector};
 use rand::Rng;
+use std::cell::RefCell;
+use std::thread::LocalKey;
 
 use crate::error::{CoreError, Result};
 use crate::gaussian::{MvNormal, cholesky};
@@ -383,41 +385,81 @@ impl StateSpaceModel for LinearGaussian {
         self.x0.sample(rng)
     }
 
-    /// `A·x_prev + B·u + W`, one allocation (the returned state). A mismatched `u` (or a `u`
-    /// given to a model without B) gives a NaN state, which a filter reports as a non-finite
-    /// weight; validate inputs up front with [`LinearGaussian::check_inputs`].
+    /// `A·x_prev + B·u + W`, one allocation (the returned state); see
+    /// [`sample_transition_into`](StateSpaceModel::sample_transition_into).
     fn sample_transition<R: Rng + ?Sized>(
         &self,
-        _t: usize,
+        t: usize,
         x_prev: &DVector<f64>,
         u: Option<&DVector<f64>>,
         rng: &mut R,
     ) -> DVector<f64> {
         let mut x = DVector::zeros(self.state_dim());
-        self.w.sample_into(rng, &mut x);
-        if x_prev.len() != self.state_dim() {
-            x.fill(f64::NAN);
-            return x;
-        }
-        x.gemv(1.0, &self.a, x_prev, 1.0);
-        if let Some(u) = u {
-            match &self.b {
-                Some(b) if u.len() == b.ncols() => x.gemv(1.0, b, u, 1.0),
-                _ => x.fill(f64::NAN),
-            }
-        }
+        self.sample_transition_into(t, x_prev, u, rng, &mut x);
         x
     }
 
-    /// `log N(y; C·x, R)`; NaN if `y` or `x` has the wrong length.
+    /// `A·x_prev + B·u + W` into `out`, allocating only if `out` is not of length d. A
+    /// mismatched `u` (or a `u` given to a model without B) gives a NaN state, which a filter
+    /// reports as a non-finite weight; validate inputs up front with
+    /// [`LinearGaussian::check_inputs`].
+    fn sample_transition_into<R: Rng + ?Sized>(
+        &self,
+        _t: usize,
+        x_prev: &DVector<f64>,
+        u: Option<&DVector<f64>>,
+        rng: &mut R,
+        out: &mut DVector<f64>,
+    ) {
+        self.w.sample_into(rng, out);
+        if x_prev.len() != self.state_dim() {
+            out.fill(f64::NAN);
+            return;
+        }
+        out.gemv(1.0, &self.a, x_prev, 1.0);
+        if let Some(u) = u {
+            match &self.b {
+                Some(b) if u.len() == b.ncols() => out.gemv(1.0, b, u, 1.0),
+                _ => out.fill(f64::NAN),
+            }
+        }
+    }
+
+    /// `log N(y; C·x, R)`; NaN if `y` or `x` has the wrong length. Allocates nothing after a
+    /// thread's first call (the residual goes to a per-thread scratch vector).
     fn log_likelihood(&self, _t: usize, x: &DVector<f64>, y: &DVector<f64>) -> f64 {
         if y.len() != self.obs_dim() || x.len() != self.state_dim() {
             return f64::NAN;
         }
-        let mut r = y.clone();
-        r.gemv(-1.0, &self.c, x, 1.0);
-        self.v.log_density_residual_in_place(&mut r)
+        with_scratch(&OBS_RESIDUAL, y.len(), |r| {
+            r.copy_from(y);
+            r.gemv(-1.0, &self.c, x, 1.0);
+            self.v.log_density_residual_in_place(r)
+        })
     }
+}
+
+thread_local! {
+    /// Per-thread storage for the residual `y − C·x`, so that weighting a particle allocates
+    /// nothing.
+    static OBS_RESIDUAL: RefCell<DVector<f64>> = RefCell::new(DVector::zeros(0));
+    /// The same for `x − A·x_prev − B·u`: a vector of its own, since a guided step evaluates
+    /// both densities and one shared vector would be resized back and forth.
+    static STATE_RESIDUAL: RefCell<DVector<f64>> = RefCell::new(DVector::zeros(0));
+}
+
+/// `f` on `scratch`, of length `len` (resized only when the length changes).
+fn with_scratch<T>(
+    scratch: &'static LocalKey<RefCell<DVector<f64>>>,
+    len: usize,
+    f: impl FnOnce(&mut DVector<f64>) -> T,
+) -> T {
+    scratch.with_borrow_mut(|r| {
+        if r.len() != len {
+            *r = DVector::zeros(len);
+        }
+        f(r)
+    })
 }
 
 impl TransitionDensity for LinearGaussian {
@@ -432,11 +474,12 @@ impl TransitionDensity for LinearGaussian {
         if x.len() != self.state_dim() {
             return f64::NAN;
         }
-        let mut r = DVector::zeros(self.state_dim());
-        self.transition_mean_into(x_prev, u, &mut r);
-        // r ← x − (A·x_prev + B·u)
-        r.axpy(1.0, x, -1.0);
-        self.w.log_density_residual_in_place(&mut r)
+        with_scratch(&STATE_RESIDUAL, x.len(), |r| {
+            self.transition_mean_into(x_prev, u, r);
+            // r ← x − (A·x_prev + B·u)
+            r.axpy(1.0, x, -1.0);
+            self.w.log_density_residual_in_place(r)
+        })
     }
 }
 
