@@ -45,4 +45,4 @@ pub mod testing;
 pub mod weights;
 
 pub use error::{CoreError, Result};
-pub use model::{EuclideanState, Proposal, StateSpaceModel, TransitionDensity};
+pub use model::{EuclideanState, Proposal, StateSpaceModel, StepAt, TransitionDensity};

@@ -72,28 +72,44 @@ pub trait TransitionDensity: StateSpaceModel {
 /// A guided filter samples from it and corrects with `g·f/q`; see
 /// [`Guided`](crate::filter::Guided). The initial state is always drawn from `μ`.
 pub trait Proposal<M: StateSpaceModel>: Sync {
-    /// Draw `X_t ~ q_t(· | x_prev, y)`.
+    /// Draw `X_t ~ q_t(· | x_prev, y_t)` into `x` and return `log q_t(x | x_prev, y_t)`.
+    ///
+    /// The density comes back with the draw because the two usually share their work (a
+    /// linearisation, a gain); it must equal [`log_density`](Self::log_density) at the draw.
+    /// `x` holds an earlier state, to be overwritten, so that heap storage can be reused.
     fn sample<R: Rng + ?Sized>(
         &self,
         model: &M,
-        t: usize,
+        at: StepAt<'_, M>,
         x_prev: &M::State,
-        u: Option<&M::Input>,
-        y: Option<&M::Obs>,
+        x: &mut M::State,
         rng: &mut R,
-    ) -> M::State;
-
-    /// `log q_t(x | x_prev, y)`.
-    fn log_density(
-        &self,
-        model: &M,
-        t: usize,
-        x_prev: &M::State,
-        x: &M::State,
-        u: Option<&M::Input>,
-        y: Option<&M::Obs>,
     ) -> f64;
+
+    /// `log q_t(x | x_prev, y_t)`.
+    fn log_density(&self, model: &M, at: StepAt<'_, M>, x_prev: &M::State, x: &M::State) -> f64;
 }
+
+/// Where a particle moves: the index `t` of the state being drawn, the input `u_t` and the
+/// observation `y_t` (`None` when missing), the same for every particle of a step.
+#[derive(Debug)]
+pub struct StepAt<'a, M: StateSpaceModel> {
+    /// Index of the state being drawn.
+    pub t: usize,
+    /// The input `u_t`.
+    pub u: Option<&'a M::Input>,
+    /// The observation `y_t`.
+    pub y: Option<&'a M::Obs>,
+}
+
+// By hand: a derive would ask `M: Copy`, and the fields are references and an index.
+impl<M: StateSpaceModel> Clone for StepAt<'_, M> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<M: StateSpaceModel> Copy for StepAt<'_, M> {}
 
 /// A model whose state is a point in ℝ^d, so weighted means and covariances make sense.
 pub trait EuclideanState {

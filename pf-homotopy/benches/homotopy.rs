@@ -1,7 +1,11 @@
-//! Cost of one correction, OHF against AOHF (the paper's cost comparison).
+//! Cost of one correction, OHF against AOHF (the paper's cost comparison), and of the PF
+//! with the linearised optimal proposal over one realisation.
 #![allow(missing_docs)] // criterion's macros generate undocumented items
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{Matrix2, Vector2};
+use pf_core::mc::stream_rng;
+use pf_homotopy::filters::pf;
+use pf_homotopy::model::ScenarioConfig;
 use pf_homotopy::ohf::{OhfConfig, OhfWorkspace, correct};
 use pf_homotopy::param::Gaussian;
 use pf_homotopy::quadrature::{PolarGrid, PolarGridConfig};
@@ -32,5 +36,16 @@ fn corrections(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, corrections);
+/// The PF of Section 4 with N = 1000 over the default scenario's realisation from seed 1
+/// (its 40 bearings, means included): the proposal's sampling and density per particle.
+fn particle_filter(c: &mut Criterion) {
+    let sc = ScenarioConfig::default();
+    let real = sc.simulate(&mut stream_rng(1, 0)).expect("valid scenario");
+    let mut rng = stream_rng(2, 0);
+    c.bench_function("pf/N=1000", |b| {
+        b.iter(|| pf::run(&sc, 1000, &real, &mut rng).expect("filter runs"))
+    });
+}
+
+criterion_group!(benches, corrections, particle_filter);
 criterion_main!(benches);

@@ -5,7 +5,7 @@ use nalgebra::DMatrix;
 use nalgebra::{Matrix2, Matrix4, Vector2, Vector4};
 use pf_core::geometry::wrap_angle;
 use pf_core::mc::stream_rng;
-use pf_core::{Proposal, StateSpaceModel, TransitionDensity};
+use pf_core::{Proposal, StateSpaceModel, StepAt, TransitionDensity};
 use pf_homotopy::HomotopyError;
 use pf_homotopy::filters::pf::{BotModel, LinearisedOptimal};
 use pf_homotopy::filters::ukf_lpc::{CartesianUkf, UkfLpc};
@@ -121,11 +121,22 @@ fn linearised_optimal_weights_equal_the_predictive_density() {
     let e = wrap_angle(y - bearing([xb[0], xb[1]], [0.0, 0.0]));
     let want = -0.5 * ((2.0 * std::f64::consts::PI * s).ln() + e * e / s);
     let mut rng = stream_rng(3, 0);
+    let at = StepAt {
+        t: 1,
+        u: None,
+        y: Some(&y),
+    };
+    let mut x = Vector4::zeros();
     for _ in 0..200 {
-        let x = LinearisedOptimal.sample(&model, 1, &x_prev, None, Some(&y), &mut rng);
+        let log_q = LinearisedOptimal.sample(&model, at, &x_prev, &mut x, &mut rng);
+        // The density returned with the draw is the density at the draw.
+        assert_eq!(
+            log_q,
+            LinearisedOptimal.log_density(&model, at, &x_prev, &x)
+        );
         let lw = model.log_likelihood(1, &x, &y)
             + model.log_transition_density(1, &x_prev, &x, None)
-            - LinearisedOptimal.log_density(&model, 1, &x_prev, &x, None, Some(&y));
+            - log_q;
         assert!((lw - want).abs() < 1e-4, "{lw} vs {want}");
     }
 }

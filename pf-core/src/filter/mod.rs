@@ -18,8 +18,9 @@ mod policy;
 mod report;
 mod sir;
 
+pub use crate::model::StepAt;
 pub use batch::{BatchBootstrap, BatchConfig, ScalarModel, default_chunk};
-pub use mutation::{Bootstrap, Guided, Mutation, StepAt};
+pub use mutation::{Bootstrap, Guided, Mutation};
 pub use policy::{EssThreshold, ResamplePolicy};
 pub use report::{RunSummary, StepReport};
 pub use sir::{FilterConfig, ParticleFilter};

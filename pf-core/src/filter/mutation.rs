@@ -4,29 +4,8 @@
 //! log-weight. [`Bootstrap`] moves with the model's own transition and weighs by the
 //! likelihood; [`Guided`] moves with a proposal and corrects by `g·f/q`.
 
-use crate::model::{Proposal, StateSpaceModel, TransitionDensity};
+use crate::model::{Proposal, StateSpaceModel, StepAt, TransitionDensity};
 use rand::Rng;
-
-/// Where a particle moves: the index `t` of the state being drawn, the input `u_t` and the
-/// observation `y_t` (`None` when missing), the same for every particle of a step.
-#[derive(Debug)]
-pub struct StepAt<'a, M: StateSpaceModel> {
-    /// Index of the state being drawn.
-    pub t: usize,
-    /// The input `u_t`.
-    pub u: Option<&'a M::Input>,
-    /// The observation `y_t`.
-    pub y: Option<&'a M::Obs>,
-}
-
-// By hand: a derive would ask `M: Copy`, and the fields are references and an index.
-impl<M: StateSpaceModel> Clone for StepAt<'_, M> {
-    fn clone(&self) -> Self {
-        *self
-    }
-}
-
-impl<M: StateSpaceModel> Copy for StepAt<'_, M> {}
 
 /// Move one particle and return its incremental log-weight.
 pub trait Mutation<M: StateSpaceModel>: Sync {
@@ -79,9 +58,6 @@ impl<M: StateSpaceModel> Mutation<M> for Bootstrap {
 }
 
 /// A guided filter: `ξ_t ~ q_t`, weight `g_t(y_t|ξ_t) f_t(ξ_t|ξ_{t−1}) / q_t(ξ_t|ξ_{t−1}, y_t)`.
-///
-/// [`Proposal::sample`] returns the state by value, so a state that owns heap memory costs
-/// an allocation per particle here (the bootstrap filter reuses the state's own).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Guided<P>(pub P);
 
@@ -94,11 +70,9 @@ impl<M: TransitionDensity, P: Proposal<M>> Mutation<M> for Guided<P> {
         x: &mut M::State,
         rng: &mut R,
     ) -> f64 {
-        let StepAt { t, u, y } = at;
-        *x = self.0.sample(model, t, x_prev, u, y, rng);
-        let log_g = y.map_or(0.0, |y| model.log_likelihood(t, x, y));
-        let log_f = model.log_transition_density(t, x_prev, x, u);
-        let log_q = self.0.log_density(model, t, x_prev, x, u, y);
+        let log_q = self.0.sample(model, at, x_prev, x, rng);
+        let log_g = at.y.map_or(0.0, |y| model.log_likelihood(at.t, x, y));
+        let log_f = model.log_transition_density(at.t, x_prev, x, at.u);
         log_g + log_f - log_q
     }
 }

@@ -460,24 +460,16 @@ mod tests {
         fn sample<R: Rng + ?Sized>(
             &self,
             m: &NoisyAr1,
-            t: usize,
+            at: StepAt<'_, NoisyAr1>,
             xp: &f64,
-            u: Option<&()>,
-            _y: Option<&f64>,
+            x: &mut f64,
             rng: &mut R,
         ) -> f64 {
-            m.sample_transition(t, xp, u, rng)
+            *x = m.sample_transition(at.t, xp, at.u, rng);
+            m.log_transition_density(at.t, xp, x, at.u)
         }
-        fn log_density(
-            &self,
-            m: &NoisyAr1,
-            t: usize,
-            xp: &f64,
-            x: &f64,
-            u: Option<&()>,
-            _y: Option<&f64>,
-        ) -> f64 {
-            m.log_transition_density(t, xp, x, u)
+        fn log_density(&self, m: &NoisyAr1, at: StepAt<'_, NoisyAr1>, xp: &f64, x: &f64) -> f64 {
+            m.log_transition_density(at.t, xp, x, at.u)
         }
     }
 

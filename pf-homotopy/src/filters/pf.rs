@@ -18,7 +18,7 @@
 use nalgebra::{Matrix4, RowVector4, Vector4};
 use pf_core::filter::{EssThreshold, FilterConfig, Guided, ParticleFilter, ResamplePolicy};
 use pf_core::resample::Resampler;
-use pf_core::{Proposal, StateSpaceModel, TransitionDensity};
+use pf_core::{Proposal, StateSpaceModel, StepAt, TransitionDensity};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
@@ -131,47 +131,58 @@ impl TransitionDensity for BotModel {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct LinearisedOptimal;
 
-impl Proposal<BotModel> for LinearisedOptimal {
-    fn sample<R: Rng + ?Sized>(
-        &self,
+impl LinearisedOptimal {
+    /// The proposal's mean `x̄ + K·e` and the log-density of `x` about it, from the
+    /// linearisation `(x̄, H, e, S)` at `x_prev` (eqs. of the module docs).
+    fn log_density_at(
         model: &BotModel,
-        t: usize,
-        x_prev: &State,
-        u: Option<&()>,
-        y: Option<&f64>,
-        rng: &mut R,
-    ) -> State {
-        let Some(&y) = y else {
-            return model.sample_transition(t, x_prev, u, rng);
-        };
-        let (xb, h, e, s) = model.linearise(t, x_prev, y);
-        let k = model.q * h.transpose() / s;
-        let z = Vector4::from_fn(|_, _| StandardNormal.sample(rng));
-        let eps: f64 = StandardNormal.sample(rng);
-        let x0 = xb + model.lq * z;
-        let innov = e - (h * (x0 - xb))[(0, 0)] - model.sigma * eps;
-        x0 + k * innov
-    }
-
-    fn log_density(
-        &self,
-        model: &BotModel,
-        t: usize,
-        x_prev: &State,
+        (xb, h, e, s): (State, RowVector4<f64>, f64, f64),
         x: &State,
-        u: Option<&()>,
-        y: Option<&f64>,
     ) -> f64 {
-        let Some(&y) = y else {
-            return model.log_transition_density(t, x_prev, x, u);
-        };
-        let (xb, h, e, s) = model.linearise(t, x_prev, y);
         let k = model.q * h.transpose() / s;
         let d = x - (xb + k * e);
         let s2 = model.sigma * model.sigma;
         let info = model.q_inv + h.transpose() * h / s2;
         let ln_det = model.ln_det_q - (s / s2).ln();
         -0.5 * (4.0 * LN_2PI + ln_det + d.dot(&(info * d)))
+    }
+}
+
+impl Proposal<BotModel> for LinearisedOptimal {
+    fn sample<R: Rng + ?Sized>(
+        &self,
+        model: &BotModel,
+        at: StepAt<'_, BotModel>,
+        x_prev: &State,
+        x: &mut State,
+        rng: &mut R,
+    ) -> f64 {
+        let Some(&y) = at.y else {
+            *x = model.sample_transition(at.t, x_prev, at.u, rng);
+            return model.log_transition_density(at.t, x_prev, x, at.u);
+        };
+        let lin = model.linearise(at.t, x_prev, y);
+        let (xb, h, e, s) = lin;
+        let k = model.q * h.transpose() / s;
+        let z = Vector4::from_fn(|_, _| StandardNormal.sample(rng));
+        let eps: f64 = StandardNormal.sample(rng);
+        let x0 = xb + model.lq * z;
+        let innov = e - (h * (x0 - xb))[(0, 0)] - model.sigma * eps;
+        *x = x0 + k * innov;
+        Self::log_density_at(model, lin, x)
+    }
+
+    fn log_density(
+        &self,
+        model: &BotModel,
+        at: StepAt<'_, BotModel>,
+        x_prev: &State,
+        x: &State,
+    ) -> f64 {
+        let Some(&y) = at.y else {
+            return model.log_transition_density(at.t, x_prev, x, at.u);
+        };
+        Self::log_density_at(model, model.linearise(at.t, x_prev, y), x)
     }
 }
 
