@@ -34,7 +34,7 @@ pub trait StateSpaceModel: Sync {
         rng: &mut R,
     ) -> Self::State;
 
-    /// Draw `X_t ~ f_t(· | x_prev, u)` into `out`, whose earlier value is overwritten.
+    /// Draw `X_t ~ f_t(· | x_prev, u)` into `x`, whose earlier value is overwritten.
     ///
     /// The filters call this one. Override it when the state owns heap memory (a
     /// `DVector`, a `Vec`), so that a step reuses each particle's storage instead of
@@ -45,10 +45,10 @@ pub trait StateSpaceModel: Sync {
         t: usize,
         x_prev: &Self::State,
         u: Option<&Self::Input>,
+        x: &mut Self::State,
         rng: &mut R,
-        out: &mut Self::State,
     ) {
-        *out = self.sample_transition(t, x_prev, u, rng);
+        *x = self.sample_transition(t, x_prev, u, rng);
     }
 
     /// `log g_t(y | x)`. May return `−∞`; must not return NaN for valid `x`.

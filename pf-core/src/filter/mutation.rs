@@ -52,7 +52,7 @@ impl<M: StateSpaceModel> Mutation<M> for Bootstrap {
         x: &mut M::State,
         rng: &mut R,
     ) -> f64 {
-        model.sample_transition_into(at.t, x_prev, at.u, rng, x);
+        model.sample_transition_into(at.t, x_prev, at.u, x, rng);
         at.y.map_or(0.0, |y| model.log_likelihood(at.t, x, y))
     }
 }

@@ -395,11 +395,11 @@ impl StateSpaceModel for LinearGaussian {
         rng: &mut R,
     ) -> DVector<f64> {
         let mut x = DVector::zeros(self.state_dim());
-        self.sample_transition_into(t, x_prev, u, rng, &mut x);
+        self.sample_transition_into(t, x_prev, u, &mut x, rng);
         x
     }
 
-    /// `A·x_prev + B·u + W` into `out`, allocating only if `out` is not of length d. A
+    /// `A·x_prev + B·u + W` into `x`, allocating only if `x` is not of length d. A
     /// mismatched `u` (or a `u` given to a model without B) gives a NaN state, which a filter
     /// reports as a non-finite weight; validate inputs up front with
     /// [`LinearGaussian::check_inputs`].
@@ -408,19 +408,19 @@ impl StateSpaceModel for LinearGaussian {
         _t: usize,
         x_prev: &DVector<f64>,
         u: Option<&DVector<f64>>,
+        x: &mut DVector<f64>,
         rng: &mut R,
-        out: &mut DVector<f64>,
     ) {
-        self.w.sample_into(rng, out);
+        self.w.sample_into(rng, x);
         if x_prev.len() != self.state_dim() {
-            out.fill(f64::NAN);
+            x.fill(f64::NAN);
             return;
         }
-        out.gemv(1.0, &self.a, x_prev, 1.0);
+        x.gemv(1.0, &self.a, x_prev, 1.0);
         if let Some(u) = u {
             match &self.b {
-                Some(b) if u.len() == b.ncols() => out.gemv(1.0, b, u, 1.0),
-                _ => out.fill(f64::NAN),
+                Some(b) if u.len() == b.ncols() => x.gemv(1.0, b, u, 1.0),
+                _ => x.fill(f64::NAN),
             }
         }
     }
