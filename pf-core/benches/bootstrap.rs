@@ -8,6 +8,7 @@ use criterion::{
     BenchmarkGroup, BenchmarkId, Criterion, Throughput, criterion_group, criterion_main,
 };
 use nalgebra::{DMatrix, DVector};
+use pf_core::StateSpaceModel;
 use pf_core::filter::{BatchBootstrap, BatchConfig, FilterConfig, ParticleFilter};
 use pf_core::kalman::LinearGaussian;
 use pf_core::mc::Par;
@@ -42,27 +43,34 @@ fn bench_batch(
     }
 }
 
+/// The generic filter with `n` particles and systematic resampling over `ys`, under the id
+/// `systematic/N=n`.
+fn bench_generic<M: StateSpaceModel>(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    model: M,
+    n: usize,
+    ys: &[Option<M::Obs>],
+) {
+    group.throughput(Throughput::Elements((n * ys.len()) as u64));
+    let mut pf = ParticleFilter::bootstrap(model, FilterConfig::new(n)).expect("valid config");
+    let mut rng = stream_rng(2, 0);
+    group.bench_function(BenchmarkId::new("systematic", format!("N={n}")), |b| {
+        b.iter(|| {
+            black_box(
+                pf.run(ys, None, &mut rng, &mut ())
+                    .expect("filter runs")
+                    .log_lik,
+            )
+        })
+    });
+}
+
 fn bootstrap(c: &mut Criterion) {
     let (model, ys) = ar1_case(STEPS);
     let mut group = c.benchmark_group("bootstrap_ar1");
     group.sample_size(10);
     for n in [1_000usize, 10_000, 100_000, 1_000_000] {
-        group.throughput(Throughput::Elements((n * STEPS) as u64));
-        let mut pf = ParticleFilter::bootstrap(model, FilterConfig::new(n)).expect("valid config");
-        let mut rng = stream_rng(2, 0);
-        group.bench_with_input(
-            BenchmarkId::new("systematic", format!("N={n}")),
-            &n,
-            |b, _| {
-                b.iter(|| {
-                    black_box(
-                        pf.run(&ys, None, &mut rng, &mut ())
-                            .expect("filter runs")
-                            .log_lik,
-                    )
-                })
-            },
-        );
+        bench_generic(&mut group, model, n, &ys);
     }
     group.finish();
 }
@@ -136,19 +144,7 @@ fn linear_gaussian(c: &mut Criterion) {
     let mut group = c.benchmark_group("bootstrap_linear_gaussian");
     group.sample_size(10);
     for n in [1_000usize, 10_000] {
-        group.throughput(Throughput::Elements((n * LG_STEPS) as u64));
-        let mut pf =
-            ParticleFilter::bootstrap(model.clone(), FilterConfig::new(n)).expect("valid config");
-        let mut rng = stream_rng(2, 0);
-        group.bench_function(BenchmarkId::new("systematic", format!("N={n}")), |b| {
-            b.iter(|| {
-                black_box(
-                    pf.run(&ys, None, &mut rng, &mut ())
-                        .expect("filter runs")
-                        .log_lik,
-                )
-            })
-        });
+        bench_generic(&mut group, model.clone(), n, &ys);
     }
     group.finish();
 }
