@@ -41,7 +41,7 @@ use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{HomotopyError, Result};
-use crate::param::{Derivatives, Gaussian};
+use crate::param::{Derivatives, Gaussian, Moments};
 use crate::quadrature::{Nodes, TemperedQuadrature};
 
 /// How the λ-ODE (12) is integrated.
@@ -234,7 +234,6 @@ pub struct OhfWorkspace<const D: usize> {
     h: DMatrix<f64>,
     l: DMatrix<f64>,
     d: DVector<f64>,
-    s: DVector<f64>,
     th: DVector<f64>,
 }
 
@@ -247,7 +246,6 @@ impl<const D: usize> Default for OhfWorkspace<D> {
             h: DMatrix::zeros(r, r),
             l: DMatrix::zeros(r, r),
             d: DVector::zeros(r),
-            s: DVector::zeros(r),
             th: DVector::zeros(r),
         }
     }
@@ -287,7 +285,7 @@ impl<const D: usize> OhfWorkspace<D> {
             }
             None => self.deriv = Some(Derivatives::new(theta).ok_or(not_pd)?),
         }
-        let deriv = self.deriv.as_mut().expect("set above");
+        let deriv = self.deriv.as_ref().expect("set above");
         match scheme {
             Scheme::Hde | Scheme::Direct => quad.fill(prior, lambda, &mut self.nodes)?,
             Scheme::Ahde => quad.fill(theta, 0.0, &mut self.nodes)?,
@@ -295,20 +293,22 @@ impl<const D: usize> OhfWorkspace<D> {
         self.nodes.normalise(k, lambda)?;
         let nodes = &self.nodes;
         let lg_bar: f64 = nodes.log_g.iter().zip(&nodes.w).map(|(l, w)| l * w).sum();
-        // −d = Σ_j w_j ∇log f(p_j) (log g_j − mean log g): eq. (26) / (28), centred.
-        self.d.fill(0.0);
-        self.h.fill(0.0);
+        // −d = Σ_j w_j ∇log f(p_j) (log g_j − mean log g): eq. (26) / (28), centred; and
+        // H = Σ_j w_j N(p_j), eq. (25). Both from the nodes' moments (see `param`).
+        let (mut centred, mut all) = (Moments::default(), Moments::default());
         for ((p, &w), &lg) in nodes.points.iter().zip(&nodes.w).zip(&nodes.log_g) {
             if w == 0.0 {
                 continue;
             }
-            deriv.score(p, &mut self.s);
-            self.d.axpy(w * (lg - lg_bar), &self.s, 1.0);
-            if scheme == Scheme::Hde {
-                deriv.accumulate_hessian(p, w, &mut self.h);
-            }
+            let u = deriv.whiten(p);
+            centred.add(&u, w * (lg - lg_bar));
+            all.add(&u, w);
         }
-        if scheme != Scheme::Hde {
+        deriv.score_sum(&centred, &mut self.d);
+        if scheme == Scheme::Hde {
+            self.h.fill(0.0);
+            deriv.add_hessian_sum(&all, &mut self.h);
+        } else {
             deriv.fisher(&mut self.h);
         }
         let mut fallback = false;

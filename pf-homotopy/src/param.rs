@@ -15,6 +15,10 @@
 //! - its mean under `f(·; θ)` itself, the Fisher information that makes (27) closed form:
 //!   `H̃ = blockdiag(Λ, ½ tr(Λ E_s Λ E_t))` (the `μ–Σ` block vanishes since `E[u] = 0`,
 //!   and `E[a_sᵀΛa_t] = tr(Λ E_s Λ E_t)` since `E[uuᵀ] = Λ`).
+//!
+//! Both are polynomials of degree at most 2 in `u`, so their weighted sums over the grid's
+//! nodes (the quadratures of (25), (26) and (28)) are computed from the nodes' weighted
+//! moments of `u` ([`Moments`]), the same sums in another order.
 
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
@@ -99,28 +103,57 @@ impl<const D: usize> Gaussian<D> {
     }
 }
 
-/// Per-point derivative evaluator for a fixed θ: holds `Λ = Σ⁻¹` and the index pairs, so
-/// that scores and Hessian integrands at many grid points cost no allocation.
+/// Weighted moments `Σ w`, `Σ w·u` and `Σ w·u uᵀ` of the whitened points `u = Λ(p − μ)`.
+///
+/// The score and the integrand `N(p; θ)` of (25) are polynomials of degree at most 2 in
+/// `u` (module docs), so their weighted sums over any set of points, the quadratures of
+/// (25), (26) and (28), are functions of these moments alone: a point costs one update here
+/// instead of an `r × r` integrand.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Moments<const D: usize> {
+    m0: f64,
+    m1: SVector<f64, D>,
+    m2: SMatrix<f64, D, D>,
+}
+
+impl<const D: usize> Default for Moments<D> {
+    fn default() -> Self {
+        Self {
+            m0: 0.0,
+            m1: SVector::zeros(),
+            m2: SMatrix::zeros(),
+        }
+    }
+}
+
+impl<const D: usize> Moments<D> {
+    /// Add the whitened point `u` with weight `w`.
+    #[inline]
+    pub fn add(&mut self, u: &SVector<f64, D>, w: f64) {
+        let wu = u * w;
+        self.m0 += w;
+        self.m1 += wu;
+        self.m2 += wu * u.transpose();
+    }
+}
+
+/// Derivative evaluator for a fixed θ: holds `Λ = Σ⁻¹` and the index pairs, so that scores
+/// and Hessian integrands, at one point or summed over many, cost no allocation.
 #[derive(Debug, Clone)]
 pub struct Derivatives<const D: usize> {
     mu: SVector<f64, D>,
     lambda_mat: SMatrix<f64, D, D>,
     pairs: Vec<(usize, usize)>,
-    /// `a_s` vectors for the current point (one per covariance parameter).
-    a: Vec<SVector<f64, D>>,
 }
 
 impl<const D: usize> Derivatives<D> {
     /// Prepare for θ = `g`; `None` if Σ is singular.
     pub fn new(g: &Gaussian<D>) -> Option<Self> {
         let lambda_mat = g.cov.try_inverse()?;
-        let pairs = Gaussian::<D>::cov_pairs();
-        let a = vec![SVector::zeros(); pairs.len()];
         Some(Self {
             mu: g.mean,
             lambda_mat,
-            pairs,
-            a,
+            pairs: Gaussian::<D>::cov_pairs(),
         })
     }
 
@@ -141,18 +174,27 @@ impl<const D: usize> Derivatives<D> {
         &self.lambda_mat
     }
 
+    /// The whitened point `u = Λ(p − μ)`.
+    #[inline]
+    pub fn whiten(&self, p: &SVector<f64, D>) -> SVector<f64, D> {
+        self.lambda_mat * (p - self.mu)
+    }
+
     /// The score `∇_θ log f(p; θ)` into `s` (length `r`).
     pub fn score(&self, p: &SVector<f64, D>, s: &mut DVector<f64>) {
-        let u = self.lambda_mat * (p - self.mu);
+        let mut m = Moments::default();
+        m.add(&self.whiten(p), 1.0);
+        self.score_sum(&m, s);
+    }
+
+    /// `Σ_j w_j ∇_θ log f(p_j; θ)` into `s` (length `r`), from the points' [`Moments`].
+    pub fn score_sum(&self, m: &Moments<D>, s: &mut DVector<f64>) {
         for i in 0..D {
-            s[i] = u[i];
+            s[i] = m.m1[i];
         }
         for (t, &(i, j)) in self.pairs.iter().enumerate() {
-            s[D + t] = if i == j {
-                0.5 * (u[i] * u[i] - self.lambda_mat[(i, i)])
-            } else {
-                u[i] * u[j] - self.lambda_mat[(i, j)]
-            };
+            let centred = m.m2[(i, j)] - m.m0 * self.lambda_mat[(i, j)];
+            s[D + t] = if i == j { 0.5 * centred } else { centred };
         }
     }
 
@@ -166,33 +208,50 @@ impl<const D: usize> Derivatives<D> {
         cs * ct * (lm[(i, k)] * lm[(j, l)] + lm[(i, l)] * lm[(j, k)])
     }
 
+    /// The entries of `a_s = E_s u` as `(k, m)`: `a_s[k] = u[m]`, and 0 elsewhere.
+    fn a_entries(&self, s: usize) -> ([(usize, usize); 2], usize) {
+        let (i, j) = self.pairs[s];
+        ([(i, j), (j, i)], if i == j { 1 } else { 2 })
+    }
+
     /// Add `w · N(p; θ)` (the integrand of (25), `−∇∇' log f`) to `h` (r × r).
-    pub fn accumulate_hessian(&mut self, p: &SVector<f64, D>, w: f64, h: &mut DMatrix<f64>) {
-        let u = self.lambda_mat * (p - self.mu);
-        for (t, &(i, j)) in self.pairs.iter().enumerate() {
-            let mut a = SVector::<f64, D>::zeros();
-            if i == j {
-                a[i] = u[i];
-            } else {
-                a[i] = u[j];
-                a[j] = u[i];
-            }
-            self.a[t] = a;
-        }
-        let nc = self.pairs.len();
+    pub fn accumulate_hessian(&self, p: &SVector<f64, D>, w: f64, h: &mut DMatrix<f64>) {
+        let mut m = Moments::default();
+        m.add(&self.whiten(p), w);
+        self.add_hessian_sum(&m, h);
+    }
+
+    /// Add `Σ_j w_j N(p_j; θ)` to `h` (r × r), from the points' [`Moments`]: `N_μμ = Λ`
+    /// sums to `Σw·Λ`, `N_μs = Λ a_s` to `Λ E_s Σw·u`, and `a_sᵀ Λ a_t` to the pairing of
+    /// `Λ` with `Σw·u uᵀ` through the entries of `a_s` and `a_t`.
+    pub fn add_hessian_sum(&self, m: &Moments<D>, h: &mut DMatrix<f64>) {
+        let lm = &self.lambda_mat;
         for r in 0..D {
             for c in 0..D {
-                h[(r, c)] += w * self.lambda_mat[(r, c)];
+                h[(r, c)] += m.m0 * lm[(r, c)];
             }
         }
+        let nc = self.pairs.len();
         for t in 0..nc {
-            let la = self.lambda_mat * self.a[t];
+            let (at, nt) = self.a_entries(t);
+            // Λ · a_t(Σw·u)
+            let mut la = SVector::<f64, D>::zeros();
+            for &(k, src) in &at[..nt] {
+                la += lm.column(k) * m.m1[src];
+            }
             for r in 0..D {
-                h[(r, D + t)] += w * la[r];
-                h[(D + t, r)] += w * la[r];
+                h[(r, D + t)] += la[r];
+                h[(D + t, r)] += la[r];
             }
             for t2 in t..nc {
-                let v = w * (la.dot(&self.a[t2]) - self.half_trace(t, t2));
+                let (at2, nt2) = self.a_entries(t2);
+                let mut quad = 0.0;
+                for &(k, src) in &at[..nt] {
+                    for &(l, src2) in &at2[..nt2] {
+                        quad += lm[(k, l)] * m.m2[(src, src2)];
+                    }
+                }
+                let v = quad - m.m0 * self.half_trace(t, t2);
                 h[(D + t, D + t2)] += v;
                 if t2 != t {
                     h[(D + t2, D + t)] += v;
@@ -252,43 +311,68 @@ mod tests {
         assert_eq!(Gaussian::<2>::from_theta(&th), g());
     }
 
+    /// Central differences of `Σ_p w_p log f(p; θ)` in θ: the weighted score and the
+    /// weighted `−∇∇' log f`.
+    fn finite_differences(points: &[(Vector2<f64>, f64)]) -> (DVector<f64>, DMatrix<f64>) {
+        let th = g().theta();
+        let sum = |th: &DVector<f64>| points.iter().map(|(p, w)| w * log_f(th, p)).sum::<f64>();
+        let eps = 1e-4;
+        let shifted = |a: usize, da: f64, b: usize, db: f64| {
+            let mut t = th.clone();
+            t[a] += da;
+            t[b] += db;
+            sum(&t)
+        };
+        let score = DVector::from_fn(5, |a, _| {
+            (shifted(a, eps, a, 0.0) - shifted(a, -eps, a, 0.0)) / (2.0 * eps)
+        });
+        let hess = DMatrix::from_fn(5, 5, |a, b| {
+            -(shifted(a, eps, b, eps) - shifted(a, eps, b, -eps) - shifted(a, -eps, b, eps)
+                + shifted(a, -eps, b, -eps))
+                / (4.0 * eps * eps)
+        });
+        (score, hess)
+    }
+
+    /// The score and `N` at one point, and their weighted sums over several points from the
+    /// points' moments, against finite differences of `log f`.
     #[test]
     fn score_and_hessian_match_finite_differences() {
-        let p = Vector2::new(2.3, -0.4);
-        let th = g().theta();
-        let mut d = Derivatives::new(&g()).unwrap();
-        let mut s = DVector::zeros(5);
-        d.score(&p, &mut s);
-        let mut h = DMatrix::zeros(5, 5);
-        d.accumulate_hessian(&p, 1.0, &mut h);
-        // Central differences: truncation O(ε_h²·f''') ≈ 1e-8, round-off O(ε/ε_h) ≈ 1e-11
-        // for the gradient; the second differences of log f have round-off
-        // O(ε/ε_h²) ≈ 2e-8; 1e-6 leaves margin for both.
-        let eps = 1e-4;
-        for a in 0..5 {
-            let mut tp = th.clone();
-            tp[a] += eps;
-            let mut tm = th.clone();
-            tm[a] -= eps;
-            let fd = (log_f(&tp, &p) - log_f(&tm, &p)) / (2.0 * eps);
-            assert!((fd - s[a]).abs() < 1e-6, "score {a}: {fd} vs {}", s[a]);
-            for b in 0..5 {
-                let mut tpp = tp.clone();
-                tpp[b] += eps;
-                let mut tpm = tp.clone();
-                tpm[b] -= eps;
-                let mut tmp = tm.clone();
-                tmp[b] += eps;
-                let mut tmm = tm.clone();
-                tmm[b] -= eps;
-                let fd2 = (log_f(&tpp, &p) - log_f(&tpm, &p) - log_f(&tmp, &p) + log_f(&tmm, &p))
-                    / (4.0 * eps * eps);
+        let d = Derivatives::new(&g()).unwrap();
+        let one = [(Vector2::new(2.3, -0.4), 1.0)];
+        let several = [
+            (Vector2::new(2.3, -0.4), 0.5),
+            (Vector2::new(-0.7, -3.1), 0.3),
+            (Vector2::new(1.4, 0.9), -0.2),
+        ];
+        for points in [&one[..], &several[..]] {
+            let (mut s, mut h) = (DVector::zeros(5), DMatrix::zeros(5, 5));
+            if let [(p, _)] = points {
+                d.score(p, &mut s);
+                d.accumulate_hessian(p, 1.0, &mut h);
+            } else {
+                let mut m = Moments::default();
+                for (p, w) in points {
+                    m.add(&d.whiten(p), *w);
+                }
+                d.score_sum(&m, &mut s);
+                d.add_hessian_sum(&m, &mut h);
+            }
+            let (fs, fh) = finite_differences(points);
+            // Central differences: truncation O(ε_h²·f''') ≈ 1e-8, round-off O(ε/ε_h) ≈
+            // 1e-11 for the gradient; the second differences of log f have round-off
+            // O(ε/ε_h²) ≈ 2e-8; 1e-6 and 1e-5 leave margin for both.
+            for a in 0..5 {
                 assert!(
-                    (-fd2 - h[(a, b)]).abs() < 1e-5,
-                    "N[{a},{b}]: {} vs {}",
-                    -fd2,
-                    h[(a, b)]
+                    (fs[a] - s[a]).abs() < 1e-6,
+                    "score {a}: {} vs {}",
+                    fs[a],
+                    s[a]
                 );
+                for b in 0..5 {
+                    let (want, got) = (fh[(a, b)], h[(a, b)]);
+                    assert!((want - got).abs() < 1e-5, "N[{a},{b}]: {want} vs {got}");
+                }
             }
         }
     }

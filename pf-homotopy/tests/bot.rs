@@ -11,7 +11,7 @@ use pf_homotopy::filters::pf::{BotModel, LinearisedOptimal};
 use pf_homotopy::filters::ukf_lpc::{CartesianUkf, UkfLpc};
 use pf_homotopy::model::ScenarioConfig;
 use pf_homotopy::model::bearing;
-use pf_homotopy::param::{Derivatives, Gaussian};
+use pf_homotopy::param::{Derivatives, Gaussian, Moments};
 use pf_homotopy::quadrature::{
     Nodes, PolarGrid, PolarGridConfig, TemperedQuadrature, node_moments,
 };
@@ -83,11 +83,13 @@ fn closed_form_fisher_matches_quadrature_of_eq_25_at_lambda_zero() {
     let mut nodes = Nodes::new();
     quad.fill(&g, 0.0, &mut nodes).unwrap();
     nodes.normalise(0, 0.0).unwrap();
-    let mut d = Derivatives::new(&g).unwrap();
-    let mut h = DMatrix::zeros(5, 5);
+    let d = Derivatives::new(&g).unwrap();
+    let mut m = Moments::default();
     for (p, w) in nodes.points.iter().zip(&nodes.w) {
-        d.accumulate_hessian(p, *w, &mut h);
+        m.add(&d.whiten(p), *w);
     }
+    let mut h = DMatrix::zeros(5, 5);
+    d.add_hessian_sum(&m, &mut h);
     let mut f = DMatrix::zeros(5, 5);
     d.fisher(&mut f);
     for i in 0..5 {

@@ -341,7 +341,10 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             }
         ),
         format!(
-            "Cost: AOHF takes {:.2} of the OHF's time here (the paper: about a quarter).",
+            "Cost: AOHF takes {:.2} of the OHF's time here (the paper: about a quarter). The \
+             integrands of (25) and (26) are quadratic in the whitened point, so our OHF sums \
+             them from the nodes' moments, and both filters' time goes to filling the polar \
+             grid (pf-homotopy README).",
             s.aohf / s.ohf
         ),
         if abl.failures.is_empty() {
