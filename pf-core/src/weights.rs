@@ -4,20 +4,71 @@
 //! degeneracy shows up, so this is also where it becomes an error instead of a NaN.
 
 use crate::error::{CoreError, Result};
+use crate::simd::math::exp_nonpositive_lanes;
+use crate::simd::{Simd, dispatch};
+
+/// Weights exponentiated at a time: the lanes of one call of the vectorised `exp`.
+const BLOCK: usize = 64;
+
+/// `e^{l_i − max}` for the (at most [`BLOCK`]) values of `l`, all `≤ max`, by pf-core's
+/// table-driven `exp` (within 2 ulp of the platform's, and about four times faster on
+/// blocks of lanes; see [`crate::simd`]); the slots past `l.len()` hold 0.
+#[inline(always)]
+fn exp_block(l: &[f64], max: f64) -> [f64; BLOCK] {
+    let mut x = [f64::NEG_INFINITY; BLOCK];
+    for (xi, &li) in x.iter_mut().zip(l) {
+        *xi = li - max;
+    }
+    exp_nonpositive_lanes(x)
+}
+
+/// `Σ_i e^{l_i − max}`, summed in index order, each term written to `w[i]` when `w` is
+/// given. Compiled for AVX2 when the CPU has it; the bits are the same either way.
+fn exp_sum(log_w: &[f64], max: f64, w: Option<&mut [f64]>) -> f64 {
+    dispatch(Simd::Auto, || {
+        let mut sum = 0.0;
+        match w {
+            Some(w) => {
+                for (wc, lc) in w.chunks_mut(BLOCK).zip(log_w.chunks(BLOCK)) {
+                    for (wi, &y) in wc.iter_mut().zip(&exp_block(lc, max)) {
+                        *wi = y;
+                        sum += y;
+                    }
+                }
+            }
+            None => {
+                for lc in log_w.chunks(BLOCK) {
+                    for &y in &exp_block(lc, max)[..lc.len()] {
+                        sum += y;
+                    }
+                }
+            }
+        }
+        sum
+    })
+}
 
 /// `log Σ_i exp(l_i)`, stable for any finite maximum; `−∞` when every term is `−∞` or the
 /// slice is empty. A NaN anywhere gives NaN (callers validate first).
 pub fn log_sum_exp(log_w: &[f64]) -> f64 {
-    let max = log_w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut max = f64::NEG_INFINITY;
+    for &l in log_w {
+        if l.is_nan() {
+            return f64::NAN;
+        }
+        max = max.max(l);
+    }
     if !max.is_finite() {
         return max;
     }
-    let sum: f64 = log_w.iter().map(|&l| (l - max).exp()).sum();
-    max + sum.ln()
+    max + exp_sum(log_w, max, None).ln()
 }
 
 /// Normalise log-weights in place so that `Σ exp(log_w) = 1`, and write the normalised
 /// weights into `w`. Returns `log Σ exp(log_w)` of the input, the log normalising constant.
+///
+/// A weight below `e^{−708}` times the largest is 0 in `w` (its log-weight stays exact):
+/// nothing a sum or a resampler does could see it.
 ///
 /// # Errors
 /// [`CoreError::NonFiniteWeight`] for a NaN or `+∞` log-weight, [`CoreError::AllWeightsZero`]
@@ -34,11 +85,7 @@ pub fn normalise(t: usize, log_w: &mut [f64], w: &mut [f64]) -> Result<f64> {
     if max == f64::NEG_INFINITY {
         return Err(CoreError::AllWeightsZero { t });
     }
-    let mut sum = 0.0;
-    for (wi, &l) in w.iter_mut().zip(log_w.iter()) {
-        *wi = (l - max).exp();
-        sum += *wi;
-    }
+    let sum = exp_sum(log_w, max, Some(w));
     let inv = 1.0 / sum;
     let log_norm = max + sum.ln();
     for (wi, l) in w.iter_mut().zip(log_w.iter_mut()) {
@@ -78,6 +125,39 @@ mod tests {
         assert_eq!(w[2], 0.0);
         assert!((log_sum_exp(&l)).abs() < 1e-15);
         assert!((ess(&[0.25; 4]) - 4.0).abs() < 1e-12);
+    }
+
+    /// The weights agree with the platform's `exp` to a few ulp, at any length (not only
+    /// whole blocks of lanes), down to `e^{−708}` times the largest (and are 0 or that small
+    /// below).
+    #[test]
+    fn normalised_weights_match_the_platform_exp() {
+        for n in [1usize, 63, 64, 65, 1000] {
+            let l0: Vec<f64> = (0..n)
+                .map(|i| ((i * 7919) % 1000) as f64 * -0.709)
+                .collect();
+            let (mut l, mut w) = (l0.clone(), vec![0.0; n]);
+            let c = normalise(0, &mut l, &mut w).unwrap();
+            let max = l0.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let terms: Vec<f64> = l0.iter().map(|&x| (x - max).exp()).collect();
+            let sum: f64 = terms.iter().sum();
+            assert!((c - (max + sum.ln())).abs() <= 4.0 * f64::EPSILON * c.abs().max(1.0));
+            assert!((log_sum_exp(&l0) - c).abs() <= 4.0 * f64::EPSILON * c.abs().max(1.0));
+            for (i, (&wi, &t)) in w.iter().zip(&terms).enumerate() {
+                let want = t / sum;
+                // Below e^{−708} times the largest weight the kernel gives 0 (its docs).
+                let tol = if l0[i] - max < -708.0 {
+                    want
+                } else {
+                    4.0 * f64::EPSILON * want
+                };
+                assert!(
+                    (wi - want).abs() <= tol,
+                    "n = {n}, i = {i}: {wi} against {want}"
+                );
+            }
+        }
+        assert!(log_sum_exp(&[0.0, f64::NAN]).is_nan());
     }
 
     #[test]
