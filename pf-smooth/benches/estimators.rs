@@ -1,5 +1,6 @@
 //! One bootstrap run on Section 5's model (n = 500) with the joint and the fixed-lag
-//! estimators attached, against the bare filter, at N = 100 and 1000.
+//! estimators attached, against the bare filter, at N = 100 and 1000; and the fixed-lag
+//! estimator alone at the report's longest lag, δ = 200.
 
 #![allow(missing_docs)] // criterion's macros generate undocumented items
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
@@ -32,6 +33,15 @@ fn bench(c: &mut Criterion) {
                 pf.run(&ys, None, &mut rng, &mut (&mut joint, &mut lag))
                     .unwrap();
                 joint.estimate().unwrap()
+            });
+        });
+        g.bench_with_input(BenchmarkId::new("fixed-lag 200", n), &n, |b, &n| {
+            let mut pf = ParticleFilter::bootstrap(model, paper_filter_config(n)).unwrap();
+            let mut rng = stream_rng(2, 0);
+            let mut lag = FixedLag::new(stats, 200).unwrap();
+            b.iter(|| {
+                pf.run(&ys, None, &mut rng, &mut lag).unwrap();
+                lag.estimate().unwrap()
             });
         });
     }

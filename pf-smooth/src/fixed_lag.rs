@@ -10,7 +10,11 @@
 //! follows the ancestor indices like `γ` in eq. (7), plus one shared vector holds the
 //! frozen, already-final contribution. The paper caches the last δ *positions* and
 //! re-evaluates `s_k` from them; caching the terms themselves gives the same numbers
-//! without re-evaluation. Memory is O(N·δ·d), independent of `n`.
+//! without re-evaluation. The terms of a step are stored once, in a table of their own
+//! (one of δ, reused in turn), and a particle's cache holds, per step, only the row of its
+//! ancestor's term: resampling then copies δ indices per particle instead of δ·d values,
+//! and the sums read the same values in the same order. Memory is O(N·δ·d), independent
+//! of `n`.
 //!
 //! Indexing: the term of step `j ≥ 1` is `s_{j−1}(X_{j−1}, X_j)`; it is frozen at step
 //! `j + δ − 1` (the paper's `k + δ` with `k = j − 1`), weighted by the weights of that step.
@@ -35,10 +39,19 @@ pub struct FixedLag<S, F> {
     delta: usize,
     /// `ξ_{k−1}^i`.
     prev: Vec<S>,
-    /// The last δ terms of each particle: N × δ × d, particle-major; the term of step j
-    /// sits in slot `j mod δ`.
-    cache: Vec<f64>,
-    cache_next: Vec<f64>,
+    /// The terms, one table of N rows of `d` per slot: the term of step `j` is in slot
+    /// `j mod δ`, row `i` computed for particle `i` of step `j`.
+    terms: Vec<f64>,
+    /// Whether a slot holds terms not yet frozen (else its terms are 0).
+    live: Vec<bool>,
+    /// Each particle's cache: for each slot, the row of its ancestor's term (N × δ,
+    /// particle-major).
+    rows: Vec<usize>,
+    rows_next: Vec<usize>,
+    /// The new terms of a step, before they go to their slot's table.
+    fresh: Vec<f64>,
+    /// `d` zeros: the terms of a slot that is not live.
+    zeros: Vec<f64>,
     /// Frozen contribution `Σ_{j frozen} Σ_i W_{j+δ−1}^i s^i_j` (length d).
     frozen: Vec<f64>,
     /// `W_k^i`.
@@ -66,8 +79,12 @@ impl<S: Clone, F: AdditiveFunctional<S>> FixedLag<S, F> {
             d,
             delta,
             prev: Vec::new(),
-            cache: Vec::new(),
-            cache_next: Vec::new(),
+            terms: Vec::new(),
+            live: vec![false; delta],
+            rows: Vec::new(),
+            rows_next: Vec::new(),
+            fresh: Vec::new(),
+            zeros: vec![0.0; d],
             frozen: vec![0.0; d],
             weights: Vec::new(),
             t: None,
@@ -89,9 +106,27 @@ impl<S: Clone, F: AdditiveFunctional<S>> FixedLag<S, F> {
         &self.frozen
     }
 
+    /// Number of particles N (0 before the first step).
+    #[inline]
+    fn n(&self) -> usize {
+        self.rows.len() / self.delta
+    }
+
     #[inline]
     fn slot(&self, j: usize) -> usize {
         j % self.delta
+    }
+
+    /// The cached term of particle `i` in slot `s` (zeros once frozen).
+    #[inline]
+    fn term(&self, i: usize, s: usize) -> &[f64] {
+        if self.live[s] {
+            let row = self.rows[i * self.delta + s];
+            let at = (s * self.n() + row) * self.d;
+            &self.terms[at..at + self.d]
+        } else {
+            &self.zeros
+        }
     }
 
     /// Write `τ̂_k^{δ,N}` (eq. (9)): the frozen part plus `Σ_i W_k^i` times the particle's
@@ -106,10 +141,9 @@ impl<S: Clone, F: AdditiveFunctional<S>> FixedLag<S, F> {
         })?;
         check_len(out.len(), self.d)?;
         out.copy_from_slice(&self.frozen);
-        let block = self.delta * self.d;
-        for (w, c) in self.weights.iter().zip(self.cache.chunks_exact(block)) {
-            for term in c.chunks_exact(self.d) {
-                for (o, v) in out.iter_mut().zip(term) {
+        for (i, w) in self.weights.iter().enumerate() {
+            for s in 0..self.delta {
+                for (o, v) in out.iter_mut().zip(self.term(i, s)) {
                     *o += w * v;
                 }
             }
@@ -126,57 +160,73 @@ impl<S: Clone, F: AdditiveFunctional<S>> FixedLag<S, F> {
         self.estimate_into(&mut out)?;
         Ok(out)
     }
+
+    /// Put the terms in `fresh` into slot `s`, row `i` for particle `i`, and point every
+    /// particle's cache there.
+    fn store_fresh(&mut self, s: usize) {
+        let (n, d, delta) = (self.n(), self.d, self.delta);
+        self.terms[s * n * d..(s + 1) * n * d].copy_from_slice(&self.fresh);
+        for (i, rows) in self.rows.chunks_exact_mut(delta).enumerate() {
+            rows[s] = i;
+        }
+        self.live[s] = true;
+    }
 }
 
 impl<S: Clone, F: AdditiveFunctional<S>> Observer<S> for FixedLag<S, F> {
     fn on_step(&mut self, view: &StepView<'_, S>) {
         let n = view.particles.len();
-        let d = self.d;
-        let block = self.delta * d;
+        let (d, delta) = (self.d, self.delta);
         let k = view.report.t;
         if k == 0 || self.t.is_none() {
-            self.cache.clear();
-            self.cache.resize(n * block, 0.0);
-            self.cache_next.resize(n * block, 0.0);
+            self.terms.clear();
+            self.terms.resize(delta * n * d, 0.0);
+            self.rows.resize(n * delta, 0);
+            self.rows_next.resize(n * delta, 0);
+            self.fresh.clear();
+            self.fresh.resize(n * d, 0.0);
+            self.live.fill(false);
             self.frozen.fill(0.0);
             // The term of X_0 belongs to s_0, frozen together with the term of step 1.
-            let off = self.slot(1) * d;
-            for (x0, c) in view
-                .particles
-                .iter()
-                .zip(self.cache.chunks_exact_mut(block))
-            {
-                self.f.initial(x0, &mut c[off..off + d]);
+            for (x0, c) in view.particles.iter().zip(self.fresh.chunks_exact_mut(d)) {
+                c.fill(0.0);
+                self.f.initial(x0, c);
             }
+            self.store_fresh(self.slot(1));
         } else {
             if view.report.resampled {
                 // The cached terms follow their trajectories, like γ in eq. (7).
-                for (i, c) in self.cache_next.chunks_exact_mut(block).enumerate() {
+                for (i, c) in self.rows_next.chunks_exact_mut(delta).enumerate() {
                     let a = view.ancestors[i];
-                    c.copy_from_slice(&self.cache[a * block..(a + 1) * block]);
+                    c.copy_from_slice(&self.rows[a * delta..(a + 1) * delta]);
                 }
-                std::mem::swap(&mut self.cache, &mut self.cache_next);
+                std::mem::swap(&mut self.rows, &mut self.rows_next);
             }
-            // The new term s_{k−1}(ξ_{k−1}^{A_k^i}, ξ_k^i) goes into slot k mod δ, emptied when
-            // its previous occupant (the term of step k − δ) was frozen at step k − 1.
-            let off = self.slot(k) * d;
-            for (i, c) in self.cache.chunks_exact_mut(block).enumerate() {
+            // The new term s_{k−1}(ξ_{k−1}^{A_k^i}, ξ_k^i) goes into slot k mod δ, added to
+            // what the particle's cache holds there: nothing once its previous occupant (the
+            // term of step k − δ) was frozen at step k − 1, the term of X_0 at step 1.
+            let sk = self.slot(k);
+            let mut fresh = std::mem::take(&mut self.fresh);
+            for (i, c) in fresh.chunks_exact_mut(d).enumerate() {
+                c.copy_from_slice(self.term(i, sk));
                 let a = view.ancestors[i];
-                self.f
-                    .increment(k, &self.prev[a], &view.particles[i], &mut c[off..off + d]);
+                self.f.increment(k, &self.prev[a], &view.particles[i], c);
             }
+            self.fresh = fresh;
+            self.store_fresh(sk);
             // Freeze the term of step j = k + 1 − δ under the weights of step k.
-            if k + 1 >= self.delta {
-                let j = k + 1 - self.delta;
+            if k + 1 >= delta {
+                let j = k + 1 - delta;
                 if j >= 1 {
-                    let off = self.slot(j) * d;
-                    for (w, c) in view.weights.iter().zip(self.cache.chunks_exact_mut(block)) {
-                        let term = &mut c[off..off + d];
-                        for (fz, v) in self.frozen.iter_mut().zip(term.iter_mut()) {
+                    let sj = self.slot(j);
+                    let mut frozen = std::mem::take(&mut self.frozen);
+                    for (i, w) in view.weights.iter().enumerate() {
+                        for (fz, v) in frozen.iter_mut().zip(self.term(i, sj)) {
                             *fz += w * *v;
-                            *v = 0.0;
                         }
                     }
+                    self.frozen = frozen;
+                    self.live[sj] = false;
                 }
             }
         }
