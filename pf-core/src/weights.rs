@@ -25,27 +25,35 @@ fn exp_block(l: &[f64], max: f64) -> [f64; BLOCK] {
 /// `Σ_i e^{l_i − max}`, summed in index order, each term written to `w[i]` when `w` is
 /// given. Compiled for AVX2 when the CPU has it; the bits are the same either way.
 fn exp_sum(log_w: &[f64], max: f64, w: Option<&mut [f64]>) -> f64 {
-    dispatch(Simd::Auto, || {
-        let mut sum = 0.0;
-        match w {
-            Some(w) => {
-                for (wc, lc) in w.chunks_mut(BLOCK).zip(log_w.chunks(BLOCK)) {
-                    for (wi, &y) in wc.iter_mut().zip(&exp_block(lc, max)) {
-                        *wi = y;
-                        sum += y;
-                    }
-                }
-            }
-            None => {
-                for lc in log_w.chunks(BLOCK) {
-                    for &y in &exp_block(lc, max)[..lc.len()] {
-                        sum += y;
-                    }
+    dispatch(
+        Simd::Auto,
+        #[inline(always)]
+        || exp_sum_inline(log_w, max, w),
+    )
+}
+
+/// [`exp_sum`]'s body, inlined into the AVX2 copy (a closure this size was not).
+#[inline(always)]
+fn exp_sum_inline(log_w: &[f64], max: f64, w: Option<&mut [f64]>) -> f64 {
+    let mut sum = 0.0;
+    match w {
+        Some(w) => {
+            for (wc, lc) in w.chunks_mut(BLOCK).zip(log_w.chunks(BLOCK)) {
+                for (wi, &y) in wc.iter_mut().zip(&exp_block(lc, max)) {
+                    *wi = y;
+                    sum += y;
                 }
             }
         }
-        sum
-    })
+        None => {
+            for lc in log_w.chunks(BLOCK) {
+                for &y in &exp_block(lc, max)[..lc.len()] {
+                    sum += y;
+                }
+            }
+        }
+    }
+    sum
 }
 
 /// `log Σ_i exp(l_i)`, stable for any finite maximum; `−∞` when every term is `−∞` or the
