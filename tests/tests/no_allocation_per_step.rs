@@ -12,6 +12,8 @@
 //!
 //! - A state that owns heap memory (a `DVector`) is written into the particles' own
 //!   storage, from the second move on.
+//! - pf-smooth's joint and fixed-lag estimators, attached to a filter, size their caches at
+//!   the first step.
 //!
 //! Everything runs on the test's own thread (`Par::Seq`), and only that thread's
 //! allocations are counted, so the other tests of this binary cannot disturb the count.
@@ -26,7 +28,9 @@ use pf_core::filter::{BatchBootstrap, BatchConfig, FilterConfig, ParticleFilter}
 use pf_core::kalman::LinearGaussian;
 use pf_core::mc::{Par, stream_rng};
 use pf_core::models::NoisyAr1;
+use pf_core::observe::Observer;
 use pf_core::resample::{Resample, Resampler};
+use pf_smooth::{Ar1Data, Ar1Statistics, FixedLag, PathSpace, Theta};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -185,6 +189,39 @@ fn generic_filter_with_vector_states_keeps_allocation_out() {
         let count = allocations_after_two_steps(pf, &ys);
         assert!(count <= allowed(resampler, 500), "{resampler}: {count}");
     }
+}
+
+/// The smoothers of pf-smooth, attached to the generic filter: the joint (path-space) and
+/// fixed-lag estimators keep their caches in buffers sized at the first step.
+#[test]
+fn smoothers_keep_allocation_out() {
+    let ys = observations(STEPS + 2);
+    let y: Vec<f64> = ys.iter().map(|y| y.expect("observed")).collect();
+    let data = Ar1Data::from_slice(&y).expect("valid data");
+    let stats = Ar1Statistics::new(&data);
+    let theta = Theta::paper_start();
+    let model = theta.model(y[0]).expect("valid model");
+    let mut pf = ParticleFilter::bootstrap(model, FilterConfig::new(300)).expect("valid config");
+    let mut joint = PathSpace::new(stats);
+    let mut lags = [1, 7, 50].map(|delta| FixedLag::new(stats, delta).expect("valid lag"));
+    let mut rng = stream_rng(7, 0);
+    let mut step = |pf: &mut ParticleFilter<_>, y: &Option<f64>| {
+        pf.step(None, y.as_ref(), &mut rng).expect("step runs");
+        let view = pf.view().expect("a step was made");
+        joint.on_step(&view);
+        for lag in &mut lags {
+            lag.on_step(&view);
+        }
+    };
+    for y in &ys[..2] {
+        step(&mut pf, y);
+    }
+    let count = allocations(|| {
+        for y in &ys[2..] {
+            step(&mut pf, y);
+        }
+    });
+    assert_eq!(count, 0);
 }
 
 /// Each resampler, called again and again on the same weights.
