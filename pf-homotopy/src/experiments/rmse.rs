@@ -90,11 +90,12 @@ pub(crate) fn validate_runs(
 
 impl RmseConfig {
     /// The paper's settings at a size preset: quick 8 realisations with N = 2000,
-    /// default 40 realisations with N = 10 000, full 500 with N = 100 000.
+    /// default 40 realisations and full 500, both with the paper's N = 100 000 (with 10 000
+    /// particles the PF degenerates after the turn, and a run costs half a second).
     pub fn at_scale(scale: Scale) -> Self {
         let (realisations, particles) = match scale {
             Scale::Quick => (8, 2_000),
-            Scale::Default => (40, 10_000),
+            Scale::Default => (40, 100_000),
             Scale::Full => (500, 100_000),
         };
         Self {

@@ -74,8 +74,8 @@ pub struct RmseArgs {
     #[arg(long, value_name = "S", default_value_t = 0)]
     pub seed: u64,
     /// Size preset for what the flags leave unset: `quick` (8 realisations, a
-    /// 2 000-particle PF), `default` (40 realisations, a 10 000-particle PF) or `full` (the
-    /// paper's: 500 realisations, a 100 000-particle PF).
+    /// 2 000-particle PF), `default` (40 realisations, the paper's 100 000-particle PF) or
+    /// `full` (the paper's: 500 realisations, a 100 000-particle PF).
     #[arg(long, value_name = "SCALE", default_value = "default")]
     pub scale: Scale,
     /// The unstated scenario values.
