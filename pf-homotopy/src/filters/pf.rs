@@ -132,14 +132,19 @@ impl TransitionDensity for BotModel {
 pub struct LinearisedOptimal;
 
 impl LinearisedOptimal {
-    /// The proposal's mean `x̄ + K·e` and the log-density of `x` about it, from the
-    /// linearisation `(x̄, H, e, S)` at `x_prev` (eqs. of the module docs).
+    /// The gain `K = Q·Hᵀ/S` of the linearisation `(x̄, H, e, S)` at `x_prev`.
+    fn gain(model: &BotModel, h: &RowVector4<f64>, s: f64) -> Vector4<f64> {
+        model.q * h.transpose() / s
+    }
+
+    /// The log-density of `x` about the proposal's mean `x̄ + K·e`, from the linearisation
+    /// `(x̄, H, e, S)` at `x_prev` and its gain `K` (eqs. of the module docs).
     fn log_density_at(
         model: &BotModel,
         (xb, h, e, s): (State, RowVector4<f64>, f64, f64),
+        k: &Vector4<f64>,
         x: &State,
     ) -> f64 {
-        let k = model.q * h.transpose() / s;
         let d = x - (xb + k * e);
         let s2 = model.sigma * model.sigma;
         let info = model.q_inv + h.transpose() * h / s2;
@@ -163,13 +168,13 @@ impl Proposal<BotModel> for LinearisedOptimal {
         };
         let lin = model.linearise(at.t, x_prev, y);
         let (xb, h, e, s) = lin;
-        let k = model.q * h.transpose() / s;
+        let k = Self::gain(model, &h, s);
         let z = Vector4::from_fn(|_, _| StandardNormal.sample(rng));
         let eps: f64 = StandardNormal.sample(rng);
         let x0 = xb + model.lq * z;
         let innov = e - (h * (x0 - xb))[(0, 0)] - model.sigma * eps;
         *x = x0 + k * innov;
-        Self::log_density_at(model, lin, x)
+        Self::log_density_at(model, lin, &k, x)
     }
 
     fn log_density(
@@ -182,7 +187,8 @@ impl Proposal<BotModel> for LinearisedOptimal {
         let Some(&y) = at.y else {
             return model.log_transition_density(at.t, x_prev, x, at.u);
         };
-        Self::log_density_at(model, model.linearise(at.t, x_prev, y), x)
+        let lin = model.linearise(at.t, x_prev, y);
+        Self::log_density_at(model, lin, &Self::gain(model, &lin.1, lin.3), x)
     }
 }
 
