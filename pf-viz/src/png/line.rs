@@ -206,13 +206,16 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
             Some(_) => format!("{} (shaded: band)", s.name),
             None => s.name.clone(),
         };
-        // The legend shows the stroke only: plotters' composed legend elements cannot borrow
-        // the in-memory backend, so dashes and markers appear on the series, not the key.
-        anno.label(name)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 30, y)], stroke));
         // Markers on a dense series would merge into a thick line: beyond this many
         // points the dash pattern alone tells the series apart.
         let marker = if dense { Marker::None } else { look.marker };
+        let drawn = style::SeriesStyle {
+            dash,
+            marker,
+            ..look
+        };
+        anno.label(name)
+            .legend(move |at| style::Key { at, look: drawn });
         match marker {
             Marker::None => {}
             Marker::Circle => {
@@ -220,13 +223,17 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
                     .draw_series(
                         points
                             .iter()
-                            .map(|&c| Circle::new(c, 4, look.color.filled())),
+                            .map(|&c| Circle::new(c, style::CIRCLE_PX, look.color.filled())),
                     )
                     .map_err(&err)?;
             }
             Marker::Cross => {
                 chart
-                    .draw_series(points.iter().map(|&c| Cross::new(c, 5, stroke)))
+                    .draw_series(
+                        points
+                            .iter()
+                            .map(|&c| Cross::new(c, style::CROSS_PX, stroke)),
+                    )
                     .map_err(&err)?;
             }
         }
@@ -243,7 +250,9 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
             ))
             .map_err(&err)?
             .label(r.label.clone())
-            .legend(move |(x, y)| DashedPathElement::new(vec![(x, y), (x + 30, y)], 3, 4, look));
+            .legend(move |(x, y)| {
+                DashedPathElement::new(vec![(x, y), (x + style::KEY_PX, y)], 3, 4, look)
+            });
     }
 
     style::draw_legend(&mut chart, path, plot.legend, AxisFonts::FULL)

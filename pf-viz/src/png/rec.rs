@@ -162,7 +162,7 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &RecPlot) -> Result<()> {
             }
             .map_err(&err)?;
             anno.label(c.name.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 30, y)], stroke));
+                .legend(move |at| style::Key { at, look });
         }
         chart
             .configure_series_labels()

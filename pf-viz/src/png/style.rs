@@ -7,9 +7,11 @@
 
 use std::sync::OnceLock;
 
+use plotters::element::{Circle, Cross, DashedPathElement, Drawable, PointCollection};
 use plotters::style::{
     Color, FontFamily, FontStyle, IntoFont, RGBColor, ShapeStyle, TextStyle, register_font,
 };
+use plotters_backend::{BackendCoord, DrawingBackend, DrawingErrorKind};
 
 use crate::error::{Result, VizError};
 
@@ -121,6 +123,13 @@ pub struct SeriesStyle {
     pub marker: Marker,
 }
 
+/// Length of a legend key, px.
+pub const KEY_PX: i32 = 30;
+/// Radius of a circle marker, px.
+pub const CIRCLE_PX: i32 = 4;
+/// Half-width of a cross marker, px.
+pub const CROSS_PX: i32 = 5;
+
 impl SeriesStyle {
     /// The plotters stroke of this series.
     pub fn stroke(&self) -> ShapeStyle {
@@ -156,6 +165,54 @@ pub const SERIES: [SeriesStyle; 4] = [
         marker: Marker::Cross,
     },
 ];
+
+/// The legend key of a series at `at`: its stroke, dash pattern and marker, so that the
+/// key looks like the line it names. (An element of its own: plotters' composed elements
+/// carry the backend's lifetime, which a legend closure may not return.)
+#[derive(Debug, Clone, Copy)]
+pub struct Key {
+    /// The key's left end, in pixels.
+    pub at: BackendCoord,
+    /// The series drawn.
+    pub look: SeriesStyle,
+}
+
+impl<'a> PointCollection<'a, BackendCoord> for &'a Key {
+    type Point = &'a BackendCoord;
+    type IntoIter = std::iter::Once<&'a BackendCoord>;
+    fn point_iter(self) -> Self::IntoIter {
+        std::iter::once(&self.at)
+    }
+}
+
+impl<DB: DrawingBackend> Drawable<DB> for Key {
+    fn draw<I: Iterator<Item = BackendCoord>>(
+        &self,
+        mut pos: I,
+        backend: &mut DB,
+        dim: (u32, u32),
+    ) -> std::result::Result<(), DrawingErrorKind<DB::ErrorType>> {
+        let Some((x, y)) = pos.next() else {
+            return Ok(());
+        };
+        let stroke = self.look.stroke();
+        // A solid key is one dash as long as the key.
+        let (on, off) = match self.look.dash {
+            Dash::Solid => (KEY_PX as u32, 0),
+            Dash::Dashed { on, off } => (on, off),
+        };
+        let line = [(x, y), (x + KEY_PX, y)];
+        DashedPathElement::new(line, on, off, stroke).draw(line.into_iter(), backend, dim)?;
+        let mid = std::iter::once((x + KEY_PX / 2, y));
+        match self.look.marker {
+            Marker::None => Ok(()),
+            Marker::Circle => {
+                Circle::new((0, 0), CIRCLE_PX, self.look.color.filled()).draw(mid, backend, dim)
+            }
+            Marker::Cross => Cross::new((0, 0), CROSS_PX, stroke).draw(mid, backend, dim),
+        }
+    }
+}
 
 /// Shaded bands (confidence or Monte Carlo intervals) use the series colour at this opacity.
 pub const BAND_ALPHA: f64 = 0.18;
@@ -308,6 +365,35 @@ pub fn plot_err<E: std::fmt::Display>(path: &std::path::Path) -> impl Fn(E) -> V
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Which pixels of a 40×20 canvas a legend key at (5, 10) inks.
+    fn key_ink(look: SeriesStyle) -> impl Fn(u32, u32) -> bool {
+        use plotters::prelude::{BitMapBackend, IntoDrawingArea};
+        let (w, h) = (40u32, 20u32);
+        let mut buf = vec![255u8; (w * h * 3) as usize];
+        {
+            let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+            root.draw(&Key { at: (5, 10), look }).unwrap();
+            root.present().unwrap();
+        }
+        move |x, y| buf[((y * w + x) * 3) as usize..][..3] != [255, 255, 255]
+    }
+
+    /// A key shows its series' dash pattern and marker: a solid key is inked through the
+    /// middle of its length, a dashed one has a gap there (its first 12 px dash ends at
+    /// x = 17, the 8 px gap runs to 25), and only a series with a cross has ink on the
+    /// cross's arm above the line.
+    #[test]
+    fn legend_keys_look_like_their_series() {
+        let solid = key_ink(SERIES[0]);
+        let dashed = key_ink(SERIES[1]);
+        let crossed = key_ink(SERIES[3]);
+        assert!(solid(21, 10) && solid(8, 10) && solid(33, 10));
+        assert!(dashed(8, 10) && !dashed(21, 10) && dashed(30, 10));
+        let arm = (5 + KEY_PX as u32 / 2 - 3, 10 - 3);
+        assert!(crossed(arm.0, arm.1));
+        assert!(!solid(arm.0, arm.1) && !dashed(arm.0, arm.1));
+    }
 
     #[test]
     fn fonts_register_and_repeat() {

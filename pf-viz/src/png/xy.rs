@@ -357,7 +357,14 @@ fn draw(
             .legend(move |(x, y)| match legend_marker {
                 Some(Marker::Cross) => Cross::new((x + 15, y), 5, stroke).into_dyn(),
                 Some(_) => Circle::new((x + 15, y), 5, color.filled()).into_dyn(),
-                None => PathElement::new(vec![(x, y), (x + 30, y)], stroke).into_dyn(),
+                None => style::Key {
+                    at: (x, y),
+                    look: style::SeriesStyle {
+                        marker: Marker::None,
+                        ..look
+                    },
+                }
+                .into_dyn(),
             });
     }
     if any_legend {

@@ -266,7 +266,7 @@ fn run_scenario(
             title(s),
             cfg.replications
         ),
-        x_label: "error tolerance ‖X̂ − X‖ (scene units)".into(),
+        x_label: "error tolerance ‖estimate − truth‖ (scene units)".into(),
         panels: (0..n_targets)
             .map(|k| RecPanel {
                 title: format!("T{}", k + 1),
