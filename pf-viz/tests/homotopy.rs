@@ -32,6 +32,20 @@ fn rmse_keeps_the_contract() {
         assert!(e.iter().all(|x| x.as_f64().unwrap() >= 0.0), "{alg}");
         let s = v["seconds_per_run"][alg].as_f64().unwrap();
         assert!(s.is_finite() && s > 0.0, "{alg}: {s}");
+        // One final error per realisation, whose mean square is the last RMS error.
+        let f: Vec<f64> = v["final_errors"][alg]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert_eq!(f.len(), 2, "{alg}");
+        let ms = f.iter().map(|x| x * x).sum::<f64>() / 2.0;
+        let last = e[n - 1].as_f64().unwrap();
+        assert!(
+            (ms.sqrt() - last).abs() <= 1e-9 * last,
+            "{alg}: {f:?} against {last}"
+        );
     }
     // Same seed, same errors.
     let w = json(&rmse);

@@ -91,7 +91,8 @@ pub(crate) fn validate_runs(
 impl RmseConfig {
     /// The paper's settings at a size preset: quick 8 realisations with N = 2000,
     /// default 40 realisations and full 500, both with the paper's N = 100 000 (with 10 000
-    /// particles the PF degenerates after the turn, and a run costs half a second).
+    /// particles the PF loses the target on a fifth of the realisations after the turn, see
+    /// the crate README; a run costs half a second).
     pub fn at_scale(scale: Scale) -> Self {
         let (realisations, particles) = match scale {
             Scale::Quick => (8, 2_000),
@@ -115,7 +116,8 @@ impl RmseConfig {
     }
 }
 
-/// Fig. 3 / `pf-viz homotopy rmse --json`: `{"time", "rmse", "seconds_per_run"}`.
+/// Fig. 3 / `pf-viz homotopy rmse --json`: `{"time", "rmse", "seconds_per_run",
+/// "final_errors"}`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RmseResult {
     /// Times `(k − 1)T`, s, of the sampling instants.
@@ -124,6 +126,9 @@ pub struct RmseResult {
     pub rmse: PerAlgorithm<Vec<f64>>,
     /// Mean wall-clock seconds per filter run (one realisation).
     pub seconds_per_run: PerAlgorithm<f64>,
+    /// Position error at the last instant, m, per realisation: a few lost tracks can make
+    /// the RMS error (see the crate README on the PF with 10 000 particles).
+    pub final_errors: PerAlgorithm<Vec<f64>>,
 }
 
 /// Per algorithm: squared errors `[r][k]` and seconds `[r]`.
@@ -186,9 +191,14 @@ pub fn rmse(cfg: &RmseConfig) -> Result<RmseResult> {
     let (sq, secs) = replicate_errors(cfg, &Algorithm::ALL)?;
     let mut rm = PerAlgorithm::<Vec<f64>>::default();
     let mut sp = PerAlgorithm::<f64>::default();
+    let mut fe = PerAlgorithm::<Vec<f64>>::default();
     for (a, &alg) in Algorithm::ALL.iter().enumerate() {
         *rm.get_mut(alg) = pf_core::metrics::rmse_per_step(&sq[a])?;
         *sp.get_mut(alg) = secs[a].iter().sum::<f64>() / secs[a].len() as f64;
+        *fe.get_mut(alg) = sq[a]
+            .iter()
+            .map(|run| run.last().map_or(f64::NAN, |e2| e2.sqrt()))
+            .collect();
     }
     Ok(RmseResult {
         time: (0..cfg.scenario.n_samples)
@@ -196,5 +206,6 @@ pub fn rmse(cfg: &RmseConfig) -> Result<RmseResult> {
             .collect(),
         rmse: rm,
         seconds_per_run: sp,
+        final_errors: fe,
     })
 }

@@ -3,7 +3,7 @@
 //!
 //! | subcommand | prints |
 //! |---|---|
-//! | `rmse` | `{"time", "rmse": {"OHF", "AOHF", "UKF-LPC", "PF"}, "seconds_per_run": {…}}` (Fig. 3) |
+//! | `rmse` | `{"time", "rmse": {"OHF", "AOHF", "UKF-LPC", "PF"}, "seconds_per_run": {…}, "final_errors": {…}}` (Fig. 3) |
 //! | `ellipses` | `{"truth": [x, y], "lambda", "ellipses": [{"center", "semi_axes", "angle"}]}` (Fig. 2) |
 //!
 //! Both take `--turn clockwise|counter-clockwise` and `--sigma-deg`, the scenario values the
@@ -11,6 +11,7 @@
 
 use clap::{Args, Subcommand, ValueEnum};
 use pf_homotopy::experiments::{EllipsesConfig, RmseConfig, Scale, ellipses, rmse};
+use pf_homotopy::filters::Algorithm;
 use pf_homotopy::model::ScenarioConfig;
 
 use super::print_json;
@@ -129,13 +130,14 @@ pub fn run(cmd: HomotopyCommand) -> Result<()> {
                 "RMS position error at t = {} s over {} realisations (PF: N = {}):",
                 r.time[last], cfg.realisations, cfg.filters.particles
             );
-            for (name, e, s) in [
-                ("UKF-LPC", &r.rmse.ukf_lpc, r.seconds_per_run.ukf_lpc),
-                ("PF", &r.rmse.pf, r.seconds_per_run.pf),
-                ("OHF", &r.rmse.ohf, r.seconds_per_run.ohf),
-                ("AOHF", &r.rmse.aohf, r.seconds_per_run.aohf),
-            ] {
-                println!("  {name:8} {:8.0} m   {:.4} s per run", e[last], s);
+            for alg in Algorithm::ALL {
+                let worst = r.final_errors.get(alg).iter().copied().fold(0.0, f64::max);
+                println!(
+                    "  {:8} {:8.0} m   {:.4} s per run   worst final error {worst:.0} m",
+                    alg.name(),
+                    r.rmse.get(alg)[last],
+                    r.seconds_per_run.get(alg)
+                );
             }
             Ok(())
         }

@@ -493,9 +493,16 @@ fn geometry_table(geo: &GeometryResult, cfg: &GeometryConfig) -> Table {
             "Beyond the paper: final RMS position error (m, ± standard error) against what the \
              paper leaves unstated, the direction of the observer's 30°/s turn and the \
              bearing noise σ; {} realisations per row (the same in every row), PF with \
-             N = {}. The last column says whether OHF and AOHF both beat the UKF-LPC, as the \
-             paper reports.",
-            cfg.base.realisations, cfg.base.filters.particles
+             N = {}{}. The last column says whether OHF and AOHF both beat the UKF-LPC, as \
+             the paper reports.",
+            cfg.base.realisations,
+            cfg.base.filters.particles,
+            if cfg.base.filters.particles < 100_000 {
+                " (fewer than the paper's 100 000: the PF then loses the target on some \
+                 realisations after the turn, see the pf-homotopy README)"
+            } else {
+                ""
+            }
         ),
         header: vec![
             "turn".into(),
