@@ -288,8 +288,8 @@ fn rmse_json_has_the_cli_shape() {
     let v = serde_json::to_value(&res).unwrap();
     let mut keys: Vec<&String> = v.as_object().unwrap().keys().collect();
     keys.sort();
-    assert_eq!(keys, ["rmse", "seconds_per_run", "time"]);
-    for part in ["rmse", "seconds_per_run"] {
+    assert_eq!(keys, ["final_errors", "rmse", "seconds_per_run", "time"]);
+    for part in ["rmse", "seconds_per_run", "final_errors"] {
         let mut k: Vec<&String> = v[part].as_object().unwrap().keys().collect();
         k.sort();
         assert_eq!(k, ["AOHF", "OHF", "PF", "UKF-LPC"]);
