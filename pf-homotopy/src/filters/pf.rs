@@ -40,6 +40,7 @@ pub struct BotModel {
     q_inv: Matrix4<f64>,
     ln_det_q: f64,
     sigma: f64,
+    ln_sigma: f64,
     /// Observer positions ρ at `t = 0, 1, …`.
     observer: Vec<[f64; 2]>,
     prior: PriorConfig,
@@ -69,6 +70,7 @@ impl BotModel {
             q,
             ln_det_q,
             sigma: scenario.sigma(),
+            ln_sigma: scenario.sigma().ln(),
             observer,
             prior: scenario.prior,
             y1,
@@ -115,7 +117,7 @@ impl StateSpaceModel for BotModel {
     /// `log N(wrap_angle(y − h(x, ρ_t)); 0, σ²)`, eqs. (21)–(22).
     fn log_likelihood(&self, t: usize, x: &State, y: &f64) -> f64 {
         let e = wrap_angle(y - bearing([x[0], x[1]], self.rho(t))) / self.sigma;
-        -0.5 * (LN_2PI + e * e) - self.sigma.ln()
+        -0.5 * (LN_2PI + e * e) - self.ln_sigma
     }
 }
 
@@ -147,9 +149,11 @@ impl LinearisedOptimal {
     ) -> f64 {
         let d = x - (xb + k * e);
         let s2 = model.sigma * model.sigma;
-        let info = model.q_inv + h.transpose() * h / s2;
+        // dᵀ Σ*⁻¹ d with Σ*⁻¹ = Q⁻¹ + HᵀH/σ², without forming the matrix.
+        let hd = (h * d)[(0, 0)];
+        let quad = d.dot(&(model.q_inv * d)) + hd * hd / s2;
         let ln_det = model.ln_det_q - (s / s2).ln();
-        -0.5 * (4.0 * LN_2PI + ln_det + d.dot(&(info * d)))
+        -0.5 * (4.0 * LN_2PI + ln_det + quad)
     }
 }
 
