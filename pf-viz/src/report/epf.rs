@@ -598,9 +598,11 @@ fn energy_table(s: Scenario, sim: &Simulation, t: &EnergyTable) -> Table {
             "{}: the weighted energies α₁E¹, α₂E², α₃E³ and their magnitude E (eq. (1)) of every \
              target × detection at frame t = {} of the example run (the style of the paper's \
              {}). M1, M2, … are the detections of T1, T2, …. \"E (paper)\" is the paper's value for the same \
-             pair on its own video, which we do not have: compare the pattern (the smallest \
-             E per row on the true pair), not the digits. The last column marks the EPF \
-             assignment.",
+             pair on its own video, which we do not have: compare the pattern, not the \
+             digits. In the paper the smallest E of each row is on the true pair; here that \
+             holds among the detections in the gate, except where E² marks the true \
+             detection as a turn (E² = 1) and the gate holds no other. The last column marks \
+             the EPF assignment.",
             title(s),
             t.frame,
             match s {
