@@ -161,6 +161,16 @@ fn pages_carry_every_figure_and_need_no_network() {
         html.contains("data:image/png;base64,"),
         "figures are embedded"
     );
+    // The header speaks of recordings only when there are some.
+    let said = if files(dir, "rrd").is_empty() {
+        "no recordings were written"
+    } else {
+        "open in the Rerun viewer"
+    };
+    assert!(
+        md.contains(said) && html.contains(said),
+        "the pages should say {said:?}"
+    );
     for banned in ["<script", "http://", "https://", "<link"] {
         assert!(!html.contains(banned), "index.html contains {banned}");
     }

@@ -11,6 +11,7 @@ use std::path::Path;
 use base64::Engine as _;
 
 use super::{Section, SectionReport, Summary, Table};
+use crate::cli::RrdOutput;
 use crate::error::{Result, VizError};
 use crate::io::write_atomic;
 
@@ -78,11 +79,11 @@ pub fn write_html(
          <title>pf report</title><style>{CSS}</style></head><body>\n\
          <h1>pf: particle-filtering papers, reproduced</h1>\n\
          <p>pf-viz {}, seed {}, scale <code>{}</code>. Every number behind these figures is \
-         in <code>summary.json</code>; the recordings (<code>*.rrd</code>) open in the Rerun \
-         viewer.</p>\n<nav>",
+         in <code>summary.json</code>; {}.</p>\n<nav>",
         esc(summary.version),
         summary.seed,
         scale_name(summary),
+        esc(recordings(summary)),
     );
     for (s, _) in reports {
         let _ = write!(out, "<a href=\"#{}\">{}</a>", s.name, esc(s.name));
@@ -126,6 +127,16 @@ pub fn write_html(
     })
 }
 
+/// What the report says of its recordings: where they open, or why there are none.
+fn recordings(summary: &Summary) -> &'static str {
+    match summary.rrd {
+        RrdOutput::Write => "the recordings (`*.rrd`) open in the Rerun viewer",
+        RrdOutput::Skip => {
+            "no recordings were written (`--no-rrd`, or a build without the `rrd` feature)"
+        }
+    }
+}
+
 /// Write `REPORT.md`, linking the figures beside it.
 ///
 /// # Errors
@@ -140,10 +151,11 @@ pub fn write_markdown(
         out,
         "# pf: particle-filtering papers, reproduced\n\n\
          pf-viz {}, seed {}, scale `{}`. Every number behind these figures is in \
-         `summary.json`; the recordings (`*.rrd`) open in the Rerun viewer.\n",
+         `summary.json`; {}.\n",
         summary.version,
         summary.seed,
         scale_name(summary),
+        recordings(summary),
     );
     for (s, r) in reports {
         let _ = write!(out, "\n## {}\n\n", s.title);
