@@ -39,8 +39,9 @@ enum Store<T> {
 }
 
 impl<T: Pod> ParticleBuf<T> {
-    /// `n` zeros.
-    pub(crate) fn zeroed(n: usize) -> Self {
+    /// `n` zeros, or [`CoreError::TooLarge`](crate::CoreError::TooLarge) when they cannot be
+    /// allocated.
+    pub(crate) fn zeroed(n: usize) -> crate::error::Result<Self> {
         let bytes = n.saturating_mul(size_of::<T>());
         if bytes >= HUGE_MIN_BYTES
             && let Ok(map) = MmapMut::map_anon(bytes)
@@ -50,13 +51,17 @@ impl<T: Pod> ParticleBuf<T> {
             // leaves ordinary pages.
             #[cfg(target_os = "linux")]
             let _ = map.advise(memmap2::Advice::HugePage);
-            return ParticleBuf {
+            return Ok(ParticleBuf {
                 store: Store::Mapped(map),
-            };
+            });
         }
-        ParticleBuf {
-            store: Store::Heap(vec![T::zeroed(); n]),
-        }
+        Ok(ParticleBuf {
+            store: Store::Heap(crate::limits::try_filled(
+                "the particle buffers",
+                n,
+                T::zeroed(),
+            )?),
+        })
     }
 }
 
@@ -91,16 +96,16 @@ mod tests {
     #[test]
     fn small_and_large_buffers_hold_their_values() {
         for n in [0usize, 1, 1000, HUGE_MIN_BYTES / 8, HUGE_MIN_BYTES / 8 + 3] {
-            let mut b = ParticleBuf::<f64>::zeroed(n);
+            let mut b = ParticleBuf::<f64>::zeroed(n).unwrap();
             assert_eq!(b.len(), n);
             assert!(b.iter().all(|&x| x == 0.0));
             b.iter_mut().enumerate().for_each(|(i, x)| *x = i as f64);
             assert!(b.iter().enumerate().all(|(i, &x)| x == i as f64));
-            let u = ParticleBuf::<usize>::zeroed(n);
+            let u = ParticleBuf::<usize>::zeroed(n).unwrap();
             assert_eq!(u.len(), n);
             assert!(u.iter().all(|&a| a == 0));
         }
-        let large = ParticleBuf::<f64>::zeroed(HUGE_MIN_BYTES / 8);
+        let large = ParticleBuf::<f64>::zeroed(HUGE_MIN_BYTES / 8).unwrap();
         assert!(matches!(large.store, Store::Mapped(_)));
     }
 }

@@ -78,6 +78,15 @@ pub enum CoreError {
         /// What was empty.
         what: &'static str,
     },
+    /// A count beyond [`MAX_COUNT`](crate::limits::MAX_COUNT), or buffers of `len` elements
+    /// that could not be allocated.
+    #[error("{what}: {len} is more than this machine can hold")]
+    TooLarge {
+        /// What was asked for.
+        what: &'static str,
+        /// How many.
+        len: usize,
+    },
 }
 
 impl CoreError {

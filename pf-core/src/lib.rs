@@ -31,6 +31,7 @@ pub mod gaussian;
 pub mod genealogy;
 pub mod geometry;
 pub mod kalman;
+pub mod limits;
 pub mod mc;
 pub mod metrics;
 pub mod model;

@@ -107,13 +107,16 @@ where
 /// [`replicate`] for fallible replications: the first error (in order of `r`) is returned.
 ///
 /// # Errors
-/// The error of the lowest-numbered failing replication.
+/// [`CoreError::TooLarge`](crate::CoreError::TooLarge) for more than
+/// [`MAX_COUNT`](crate::limits::MAX_COUNT) replications (a count from user input, checked
+/// before anything is allocated), or the error of the lowest-numbered failing replication.
 pub fn try_replicate<T, E, F>(seed: u64, n: usize, par: Par, f: F) -> Result<Vec<T>, E>
 where
     T: Send,
-    E: Send,
+    E: Send + From<crate::CoreError>,
     F: Fn(usize, &mut PfRng) -> Result<T, E> + Sync,
 {
+    crate::limits::check_count("the number of replications", n)?;
     replicate(seed, n, par, f).into_iter().collect()
 }
 
@@ -128,6 +131,7 @@ pub fn mean_and_se(x: &[f64]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::CoreError;
     use rand::RngExt;
 
     /// The report's manifest, the experiments' JSON and the command line all name the
@@ -175,13 +179,17 @@ mod tests {
 
     #[test]
     fn first_error_in_order_wins() {
-        let r: Result<Vec<usize>, usize> =
-            try_replicate(
-                0,
-                10,
-                Par::Rayon,
-                |r, _| if r >= 3 { Err(r) } else { Ok(r) },
-            );
-        assert_eq!(r, Err(3));
+        let fail_from_3 = |r: usize, _: &mut PfRng| {
+            if r >= 3 {
+                Err(CoreError::Empty { what: "run" }.at_step(r))
+            } else {
+                Ok(r)
+            }
+        };
+        let r = try_replicate(0, 10, Par::Rayon, fail_from_3);
+        assert!(matches!(r, Err(CoreError::AtStep { t: 3, .. })), "{r:?}");
+        // A count no machine could hold is refused before anything runs.
+        let r = try_replicate(0, usize::MAX, Par::Rayon, fail_from_3);
+        assert!(matches!(r, Err(CoreError::TooLarge { .. })), "{r:?}");
     }
 }

@@ -99,14 +99,14 @@ impl ScenarioConfig {
     /// Check the rates.
     ///
     /// # Errors
-    /// [`EpfError::InvalidParameter`] for a negative clutter rate or a miss probability
-    /// outside `[0, 1)`.
+    /// [`EpfError::InvalidParameter`] for a clutter rate outside `[0, 10⁴]` or a miss
+    /// probability outside `[0, 1)`.
     pub fn validate(&self) -> Result<()> {
-        if !(self.clutter >= 0.0 && self.clutter.is_finite()) {
+        if !(self.clutter >= 0.0 && self.clutter <= MAX_CLUTTER) {
             return Err(EpfError::InvalidParameter {
                 name: "clutter",
                 value: self.clutter,
-                reason: "the mean clutter per frame must be finite and ≥ 0",
+                reason: "the mean clutter per frame must lie in [0, 10⁴]",
             });
         }
         if !(self.miss >= 0.0 && self.miss < 1.0) {
@@ -119,6 +119,10 @@ impl ScenarioConfig {
         Ok(())
     }
 }
+
+/// The largest mean clutter per frame a scenario accepts: far more detections than targets
+/// already at 100, and each frame's detections are kept in memory.
+pub const MAX_CLUTTER: f64 = 1e4;
 
 /// One target's true path at the observed frames.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -238,7 +242,17 @@ pub fn simulate<R: Rng + ?Sized>(cfg: &ScenarioConfig, rng: &mut R) -> Result<Si
     lo -= Vec2::repeat(3.0);
     hi += Vec2::repeat(3.0);
     let noise = Normal::new(0.0, sc.noise()).expect("positive noise");
-    let clutter = (cfg.clutter > 0.0).then(|| Poisson::new(cfg.clutter).expect("positive rate"));
+    let clutter = if cfg.clutter > 0.0 {
+        Some(
+            Poisson::new(cfg.clutter).map_err(|_| EpfError::InvalidParameter {
+                name: "clutter",
+                value: cfg.clutter,
+                reason: "not a Poisson rate",
+            })?,
+        )
+    } else {
+        None
+    };
     let mut rows = Vec::new();
     let mut init_rows = Vec::new();
     for (i, &f) in frames.iter().enumerate() {

@@ -48,6 +48,18 @@ impl AdviseConfig {
                 reason: "at least one state must be in the PF",
             });
         }
+        // One option per k is weighed, so the dimensions bound the work; a million state
+        // components is far beyond what the flop model (eqs. (11)-(12)) was fitted for.
+        if self.p.saturating_add(self.k) > MAX_DIMENSION {
+            return Err(MpfError::InvalidParameter {
+                name: "p + k",
+                value: self.p.saturating_add(self.k) as f64,
+                reason: "the state may have at most 10⁶ components",
+            });
+        }
+        if let Some(n) = self.particles {
+            pf_core::limits::check_count("particles", n)?;
+        }
         match (self.budget_s, self.particles) {
             (Some(b), None) if !(b.is_finite() && b > 0.0) => Err(MpfError::InvalidParameter {
                 name: "budget_s",
@@ -68,6 +80,9 @@ impl AdviseConfig {
         }
     }
 }
+
+/// The largest state dimension `p + k` the advisor weighs.
+pub const MAX_DIMENSION: usize = 1_000_000;
 
 /// One partition's predicted cost.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -115,6 +130,13 @@ pub fn advise(cfg: &AdviseConfig, calibration: &Calibration) -> Result<Advice> {
                     .floor();
                 if n < 1.0 {
                     continue;
+                }
+                if n > pf_core::limits::MAX_COUNT as f64 {
+                    return Err(MpfError::InvalidParameter {
+                        name: "budget_s",
+                        value: cfg.budget_s.unwrap_or(f64::NAN),
+                        reason: "the budget allows more than 2³² particles",
+                    });
                 }
                 n as usize
             }

@@ -167,12 +167,14 @@ impl StochasticEm {
     /// Check the configuration.
     ///
     /// # Errors
-    /// A bad schedule or `δ = 0`.
+    /// A bad schedule, `δ = 0`, or more iterations than
+    /// [`MAX_COUNT`](pf_core::limits::MAX_COUNT).
     pub fn validate(&self) -> Result<()> {
         self.particles.validate()?;
         if let Estimator::FixedLag(d) = self.estimator {
             at_least_one("delta", d)?;
         }
+        pf_core::limits::check_count("iterations", self.iterations)?;
         Ok(())
     }
 
@@ -190,7 +192,7 @@ impl StochasticEm {
     ) -> Result<Vec<Theta>> {
         self.validate()?;
         theta0.validate()?;
-        let mut path = Vec::with_capacity(self.iterations + 1);
+        let mut path = pf_core::limits::try_with_capacity("the EM path", self.iterations + 1)?;
         path.push(*theta0);
         for it in 1..=self.iterations {
             let cfg = paper_filter_config(self.particles.at(it));

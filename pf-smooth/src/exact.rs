@@ -85,7 +85,8 @@ pub fn exact_em_step(data: &Ar1Data, theta: &Theta) -> Result<Theta> {
 /// [`SmoothError::Iteration`] naming the iteration that failed.
 pub fn exact_em(data: &Ar1Data, theta0: &Theta, iterations: usize) -> Result<Vec<Theta>> {
     theta0.validate()?;
-    let mut path = Vec::with_capacity(iterations + 1);
+    pf_core::limits::check_count("iterations", iterations)?;
+    let mut path = pf_core::limits::try_with_capacity("the EM path", iterations + 1)?;
     path.push(*theta0);
     for it in 1..=iterations {
         let next = exact_em_step(data, &path[it - 1]).map_err(|e| SmoothError::Iteration {

@@ -36,6 +36,7 @@
 use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::buffer::ParticleBuf;
 use crate::error::{CoreError, Result};
+use crate::limits::check_count;
 use crate::mc::{Par, PfRng, stream_rng};
 use crate::resample::{
     BLOCK, BlockPlan, Blocked, ChunkSplit, ChunkedWeights, Resampler, SCAN, chunks_per_block,
@@ -291,19 +292,19 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             });
         }
         cfg.policy.validate()?;
-        let n = cfg.n_particles;
+        let n = check_count("the number of particles N", cfg.n_particles)?;
         let chunks = n.div_ceil(cfg.chunk);
         let mut f = BatchBootstrap {
             model,
             cfg,
-            x: ParticleBuf::zeroed(n),
-            x_new: ParticleBuf::zeroed(n),
-            lw: ParticleBuf::zeroed(n),
-            lw_new: ParticleBuf::zeroed(n),
-            cw: ParticleBuf::zeroed(n),
-            cw_new: ParticleBuf::zeroed(n),
-            ancestors: ParticleBuf::zeroed(n),
-            w_norm: ParticleBuf::zeroed(n),
+            x: ParticleBuf::zeroed(n)?,
+            x_new: ParticleBuf::zeroed(n)?,
+            lw: ParticleBuf::zeroed(n)?,
+            lw_new: ParticleBuf::zeroed(n)?,
+            cw: ParticleBuf::zeroed(n)?,
+            cw_new: ParticleBuf::zeroed(n)?,
+            ancestors: ParticleBuf::zeroed(n)?,
+            w_norm: ParticleBuf::zeroed(n)?,
             split: ChunkSplit::default(),
             rngs: Vec::with_capacity(chunks),
             master: stream_rng(cfg.seed, u64::MAX),
@@ -1128,6 +1129,11 @@ mod tests {
                 }
             ),
             Err(CoreError::InvalidParameter { name: "chunk", .. })
+        ));
+        // A count no machine can hold is refused, not a capacity overflow panic.
+        assert!(matches!(
+            BatchBootstrap::new(m, BatchConfig::new(usize::MAX, 0)),
+            Err(CoreError::TooLarge { .. })
         ));
         let mut f = BatchBootstrap::new(m, BatchConfig::new(10, 0)).unwrap();
         assert!(f.run(&[]).is_err());

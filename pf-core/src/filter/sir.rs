@@ -2,6 +2,7 @@
 
 use super::{Bootstrap, Mutation, ResamplePolicy, RunSummary, StepAt, StepReport};
 use crate::error::{CoreError, Result};
+use crate::limits::{check_count, try_filled, try_with_capacity};
 use crate::model::{EuclideanState, StateSpaceModel};
 use crate::observe::{Observer, StepView};
 use crate::particles;
@@ -42,8 +43,19 @@ impl FilterConfig {
                 reason: "the number of particles must be at least 1",
             });
         }
+        check_count("the number of particles N", self.n_particles)?;
         self.policy.validate()
     }
+}
+
+/// What the filter's buffers are named in a [`CoreError::TooLarge`].
+const PARTICLES: &str = "the particle buffers";
+
+/// `0, 1, …, n − 1`: the identity ancestry.
+fn identity(n: usize) -> Result<Vec<usize>> {
+    let mut a = try_with_capacity(PARTICLES, n)?;
+    a.extend(0..n);
+    Ok(a)
 }
 
 /// A sequential importance sampling–resampling filter, generic over the model `M`, the
@@ -93,14 +105,14 @@ impl<M: StateSpaceModel, P: Mutation<M>, Rs: Resample> ParticleFilter<M, P, Rs> 
             resampler,
             policy: config.policy,
             n,
-            x: Vec::with_capacity(n),
-            x_next: Vec::with_capacity(n),
-            log_w: vec![0.0; n],
-            log_w_next: vec![0.0; n],
-            w: vec![0.0; n],
-            w_next: vec![0.0; n],
-            ancestors: (0..n).collect(),
-            ancestors_next: (0..n).collect(),
+            x: try_with_capacity(PARTICLES, n)?,
+            x_next: try_with_capacity(PARTICLES, n)?,
+            log_w: try_filled(PARTICLES, n, 0.0)?,
+            log_w_next: try_filled(PARTICLES, n, 0.0)?,
+            w: try_filled(PARTICLES, n, 0.0)?,
+            w_next: try_filled(PARTICLES, n, 0.0)?,
+            ancestors: identity(n)?,
+            ancestors_next: identity(n)?,
             last: None,
         })
     }
@@ -362,6 +374,16 @@ mod tests {
             // The density computed on the natural scale, as much user code does: far from
             // the data it underflows to 0, so its log is −∞ for every particle.
             (-0.5 * ((y - x) / 1e-3).powi(2)).exp().ln()
+        }
+    }
+
+    #[test]
+    fn particle_counts_no_machine_can_hold_are_errors() {
+        for n in [usize::MAX, crate::limits::MAX_COUNT + 1] {
+            assert!(matches!(
+                ParticleFilter::bootstrap(ar1(), FilterConfig::new(n)).map(|_| ()),
+                Err(CoreError::TooLarge { .. })
+            ));
         }
     }
 
