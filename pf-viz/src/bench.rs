@@ -10,6 +10,7 @@
 use std::time::Instant;
 
 use pf_core::filter::{BatchBootstrap, BatchConfig, ResamplePolicy};
+use pf_core::limits::check_count;
 use pf_core::mc::{Par, stream_rng};
 use pf_core::models::NoisyAr1;
 use serde::{Deserialize, Serialize};
@@ -45,15 +46,16 @@ pub struct BenchResult {
 /// Run the benchmark.
 ///
 /// # Errors
-/// Bad arguments (N = 0, n = 0, T = 0, R = 0, more steps than data), unreadable data, or a
-/// filter failure.
+/// Bad arguments (N = 0, n = 0, T = 0 or above [`MAX_THREADS`](crate::cli::MAX_THREADS),
+/// R = 0, more steps than data), unreadable data, or a filter failure.
 pub fn bootstrap(args: &BenchBootstrapArgs) -> Result<BenchResult> {
     let invalid = |message: String| VizError::Argument { message };
     if args.particles == 0 {
         return Err(invalid("--particles must be at least 1".into()));
     }
-    if args.threads == 0 {
-        return Err(invalid("--threads must be at least 1".into()));
+    crate::cli::check_threads("--threads", args.threads)?;
+    if let Some(n) = args.steps {
+        check_count("--steps", n).map_err(VizError::core("bench"))?;
     }
     if args.repeat == 0 {
         return Err(invalid("--repeat must be at least 1".into()));
@@ -171,6 +173,7 @@ pub fn genealogy(args: &BenchGenealogyArgs) -> Result<GenealogyBenchResult> {
         return Err(invalid("--steps must be at least 1"));
     }
     let core = VizError::core("bench genealogy");
+    check_count("--steps", args.steps).map_err(core)?;
     let model = NoisyAr1::new(0.98, 0.2, 1.0).map_err(core)?;
     let (_, ys) = model.simulate(args.steps, &mut stream_rng(args.seed, u64::MAX));
     let obs: Vec<Option<f64>> = ys.into_iter().map(Some).collect();

@@ -6,6 +6,12 @@ use std::path::PathBuf;
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use serde::{Deserialize, Serialize};
 
+use crate::error::VizError;
+
+/// Most worker threads `--threads` and `--jobs` accept: far beyond any machine's cores, and
+/// small enough that building the pool takes well under a second (10 000 took minutes).
+pub const MAX_THREADS: usize = 1024;
+
 /// `pf-viz`: figures, tables and Rerun recordings for the pf papers.
 #[derive(Debug, Parser)]
 #[command(name = "pf-viz", version, about, propagate_version = true)]
@@ -104,8 +110,8 @@ pub struct BenchBootstrapArgs {
     /// Number of steps n after Y_0 (default 500, or all the data).
     #[arg(long, value_name = "n")]
     pub steps: Option<usize>,
-    /// Worker threads within each step.
-    #[arg(long, value_name = "T", default_value_t = 1)]
+    /// Worker threads within each step (1 to 1024).
+    #[arg(long, value_name = "T", default_value_t = 1, value_parser = thread_count())]
     pub threads: usize,
     /// Resampling scheme.
     #[arg(long, default_value = "systematic")]
@@ -138,9 +144,9 @@ pub struct ReportArgs {
     /// Run only these sections (comma-separated), e.g. `smooth,epf`.
     #[arg(long, value_name = "SECTIONS", value_delimiter = ',')]
     pub only: Vec<String>,
-    /// Worker threads for Monte Carlo replications (default: all cores). Results do not
-    /// depend on it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    /// Worker threads for Monte Carlo replications, 1 to 1024 (default: all cores).
+    /// Results do not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_THREADS as i64))]
     pub jobs: Option<u32>,
     /// Do not write Rerun `.rrd` recordings.
     #[arg(long)]
@@ -165,6 +171,27 @@ impl RrdOutput {
         } else {
             RrdOutput::Write
         }
+    }
+}
+
+/// The parser of `--threads`: 1 to [`MAX_THREADS`], refused by clap as a usage error.
+fn thread_count() -> clap::builder::RangedU64ValueParser<usize> {
+    clap::builder::RangedU64ValueParser::new().range(1..=MAX_THREADS as u64)
+}
+
+/// Check a thread count given as `flag`, for callers of the library that bypass clap: zero
+/// does nothing and more than [`MAX_THREADS`] takes minutes to start, so both are refused
+/// before any work.
+///
+/// # Errors
+/// [`VizError::Argument`] naming `flag` and the limit.
+pub fn check_threads(flag: &str, n: usize) -> Result<(), VizError> {
+    if (1..=MAX_THREADS).contains(&n) {
+        Ok(())
+    } else {
+        Err(VizError::Argument {
+            message: format!("{flag} must be between 1 and {MAX_THREADS}, got {n}"),
+        })
     }
 }
 
@@ -196,5 +223,29 @@ mod tests {
         assert!(!a.no_rrd);
         assert!(Cli::try_parse_args(["pf-viz", "report"]).is_err());
         assert!(Cli::try_parse_args(["pf-viz", "report", "--out", "x", "--seed", "-3"]).is_err());
+    }
+
+    /// Thread counts beyond [`MAX_THREADS`] are usage errors, before any pool is built.
+    #[test]
+    fn thread_counts_are_bounded() {
+        let parse = |args: &[&str]| Cli::try_parse_args([&["pf-viz"][..], args].concat());
+        let max = MAX_THREADS.to_string();
+        let over = (MAX_THREADS + 1).to_string();
+        assert!(parse(&["bench", "bootstrap", "--threads", &max]).is_ok());
+        assert!(parse(&["report", "--out", "x", "--jobs", &max]).is_ok());
+        for args in [
+            &["bench", "bootstrap", "--threads", &over][..],
+            &["bench", "bootstrap", "--threads", "0"][..],
+            &["report", "--out", "x", "--jobs", &over][..],
+            &["report", "--out", "x", "--jobs", "4294967295"][..],
+        ] {
+            let e = parse(args).unwrap_err();
+            assert_eq!(e.kind(), clap::error::ErrorKind::ValueValidation, "{e}");
+        }
+        assert!(check_threads("--jobs", MAX_THREADS).is_ok());
+        for n in [0, MAX_THREADS + 1, usize::MAX] {
+            let e = check_threads("--jobs", n).unwrap_err();
+            assert!(e.to_string().contains("--jobs"), "{e}");
+        }
     }
 }

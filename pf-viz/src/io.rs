@@ -3,10 +3,12 @@
 //! Every file is first written to a temporary sibling (`.NAME.tmp-<pid>-<n>`, in the same
 //! directory so the final `rename` is atomic), flushed and `fsync`ed, then renamed over the
 //! target. On any error — or a panic in the writer — the temporary file is removed and the
-//! target is left as it was.
+//! target is left as it was. A symbolic link is followed, so its target is replaced and the
+//! link kept; a device, FIFO or socket (`/dev/null`) is written in place, never replaced.
+//! Errors name the user's path, never the temporary file.
 
 use std::fs::{self, File, OpenOptions};
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, ErrorKind, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -63,12 +65,69 @@ impl Drop for TempGuard {
     }
 }
 
-/// `fsync` a finished temporary file, then rename it over `target`.
-fn commit(tmp: &Path, target: &Path) -> Result<()> {
+/// Most symbolic links followed before giving up: a loop must fail, not hang.
+const MAX_LINKS: usize = 40;
+
+/// Where the bytes for a user's path go, once links are followed.
+#[derive(Debug, PartialEq, Eq)]
+enum Target {
+    /// A regular file, existing or not: written through a temporary sibling and renamed.
+    File(PathBuf),
+    /// A device, FIFO or socket: written in place, since a rename would replace the node
+    /// itself (turning `/dev/null` into a regular file).
+    Special(PathBuf),
+}
+
+/// Follow `path` through symbolic links to the name that is to receive the bytes, so the
+/// rename replaces the link's target and the link stays a link. A dangling link resolves
+/// to the file it names, which is then created.
+fn follow_links(path: &Path) -> std::io::Result<PathBuf> {
+    let mut p = path.to_owned();
+    for _ in 0..MAX_LINKS {
+        match fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let to = fs::read_link(&p)?;
+                // A relative link is relative to the directory holding it.
+                p = p.parent().unwrap_or(Path::new("")).join(to);
+            }
+            // Missing or not a link: this is the name to write (any other problem is
+            // reported by the write itself).
+            _ => return Ok(p),
+        }
+    }
+    Err(std::io::Error::other("too many levels of symbolic links"))
+}
+
+/// Classify `path` for writing.
+///
+/// # Errors
+/// An I/O error naming `path` if it is a directory, a link loop, or cannot be examined.
+fn target(path: &Path) -> Result<Target> {
+    let real = follow_links(path).map_err(VizError::io(path))?;
+    match fs::metadata(&real) {
+        Err(e) if e.kind() == ErrorKind::NotFound => Ok(Target::File(real)),
+        Err(e) => Err(VizError::io(path)(e)),
+        Ok(m) if m.is_file() => Ok(Target::File(real)),
+        Ok(m) if m.is_dir() => Err(VizError::io(path)(ErrorKind::IsADirectory.into())),
+        Ok(_) => Ok(Target::Special(real)),
+    }
+}
+
+/// Open an existing device, FIFO or socket for writing, without creating or truncating.
+fn open_special(dev: &Path, shown: &Path) -> Result<File> {
+    OpenOptions::new()
+        .write(true)
+        .open(dev)
+        .map_err(VizError::io(shown))
+}
+
+/// `fsync` a finished temporary file, then rename it over `target`. Errors name `shown`,
+/// the path the user gave, never the temporary file.
+fn commit(tmp: &Path, target: &Path, shown: &Path) -> Result<()> {
     File::open(tmp)
         .and_then(|f| f.sync_all())
-        .map_err(VizError::io(tmp))?;
-    fs::rename(tmp, target).map_err(VizError::io(target))?;
+        .map_err(VizError::io(shown))?;
+    fs::rename(tmp, target).map_err(VizError::io(shown))?;
     // Persist the rename itself; not every platform lets a directory be opened and synced,
     // and the data are already safe, so a failure here is not an error.
     if let Some(dir) = target.parent().filter(|d| !d.as_os_str().is_empty())
@@ -82,49 +141,98 @@ fn commit(tmp: &Path, target: &Path) -> Result<()> {
 /// Write `path` atomically: `write` fills a buffered writer on a temporary sibling, which is
 /// renamed over `path` only if `write` and the flush succeed.
 ///
+/// A symbolic link is followed (the target is replaced, the link kept). A device, FIFO or
+/// socket is written in place, as a shell redirection would: there is nothing to rename,
+/// and `/dev/null` must stay a device. A directory is an error.
+///
 /// # Errors
-/// The writer's own error, or an I/O error naming the path at fault. The temporary file is
-/// removed in every failing case.
+/// The writer's own error, or an I/O error naming `path` (never the temporary file). The
+/// temporary file is removed in every failing case.
 pub fn write_atomic<F>(path: &Path, write: F) -> Result<()>
 where
     F: FnOnce(&mut dyn Write) -> Result<()>,
 {
-    let tmp = temp_path(path, false);
-    let mut guard = TempGuard::new(tmp.clone());
-    let file = OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&tmp)
-        .map_err(VizError::io(&tmp))?;
+    match target(path)? {
+        Target::Special(dev) => write_buffered(open_special(&dev, path)?, false, path, write),
+        Target::File(real) => {
+            let tmp = temp_path(&real, false);
+            let mut guard = TempGuard::new(tmp.clone());
+            let file = OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&tmp)
+                .map_err(VizError::io(path))?;
+            write_buffered(file, true, path, write)?;
+            commit(&tmp, &real, path)?;
+            guard.disarm();
+            Ok(())
+        }
+    }
+}
+
+/// Run `write` on a buffered `file`, flush it and, if `sync`, `fsync` it (not a device:
+/// `/dev/null` cannot be synced); errors name `shown`.
+fn write_buffered<F>(file: File, sync: bool, shown: &Path, write: F) -> Result<()>
+where
+    F: FnOnce(&mut dyn Write) -> Result<()>,
+{
     let mut w = BufWriter::new(file);
     write(&mut w)?;
     let file = w
         .into_inner()
-        .map_err(|e| VizError::io(&tmp)(e.into_error()))?;
-    file.sync_all().map_err(VizError::io(&tmp))?;
-    drop(file);
-    commit(&tmp, path)?;
-    guard.disarm();
+        .map_err(|e| VizError::io(shown)(e.into_error()))?;
+    if sync {
+        file.sync_all().map_err(VizError::io(shown))?;
+    }
     Ok(())
 }
 
 /// Write `path` atomically through a writer that wants a path of its own (plotters' bitmap
-/// backend, Rerun's file sink). `write` gets a temporary sibling with the same extension;
+/// backend, Rerun's file sink). `write` gets a temporary file with `path`'s extension;
 /// once it returns `Ok` the file is `fsync`ed and renamed over `path`.
 ///
+/// Links, devices and directories are treated as by [`write_atomic`]; for a device the
+/// temporary file lives in the system temp directory and is copied into the device.
+///
 /// # Errors
-/// The writer's error, or an I/O error naming the path at fault. The temporary file is
-/// removed in every failing case, also if `write` returned `Ok` without creating it.
+/// The writer's error, or an I/O error naming `path`. The temporary file is removed in
+/// every failing case, also if `write` returned `Ok` without creating it.
 pub fn write_atomic_path<F>(path: &Path, write: F) -> Result<()>
 where
     F: FnOnce(&Path) -> Result<()>,
 {
-    let tmp = temp_path(path, true);
+    let target = target(path)?;
+    let dir = match &target {
+        Target::File(real) => real.parent().unwrap_or(Path::new("")).to_owned(),
+        Target::Special(_) => std::env::temp_dir(),
+    };
+    // Named after `path`, not the link's target, so the writer sees the extension asked for.
+    let name = path.file_name().unwrap_or("out".as_ref());
+    let tmp = temp_path(&dir.join(name), true);
     let mut guard = TempGuard::new(tmp.clone());
     write(&tmp)?;
-    commit(&tmp, path)?;
-    guard.disarm();
+    if !tmp.exists() {
+        let e = std::io::Error::new(ErrorKind::NotFound, "the writer created no file");
+        return Err(VizError::io(path)(e));
+    }
+    match &target {
+        Target::File(real) => {
+            commit(&tmp, real, path)?;
+            guard.disarm();
+        }
+        // The guard removes the scratch copy.
+        Target::Special(dev) => copy_into(&tmp, dev, path)?,
+    }
     Ok(())
+}
+
+/// Copy the finished temporary file `tmp` into the device `dev`; errors name `shown`.
+fn copy_into(tmp: &Path, dev: &Path, shown: &Path) -> Result<()> {
+    let mut src = File::open(tmp).map_err(VizError::io(shown))?;
+    let mut dst = open_special(dev, shown)?;
+    std::io::copy(&mut src, &mut dst)
+        .and_then(|_| dst.flush())
+        .map_err(VizError::io(shown))
 }
 
 /// Write `value` as pretty-printed JSON (with a final newline), atomically.
@@ -302,5 +410,133 @@ mod tests {
         let good = s.0.join("good/nested");
         prepare_out_dir(&good).unwrap();
         assert_eq!(fs::read_dir(&good).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn a_symlink_is_followed_and_kept() {
+        let s = Scratch::new("link");
+        let target = s.0.join("target.csv");
+        fs::write(&target, b"old").unwrap();
+        let link = s.0.join("link.csv");
+        std::os::unix::fs::symlink("target.csv", &link).unwrap();
+        write_atomic(&link, |w| w.write_all(b"new").map_err(VizError::io(&link))).unwrap();
+        assert!(fs::symlink_metadata(&link).unwrap().is_symlink());
+        assert_eq!(fs::read(&target).unwrap(), b"new");
+        // A path writer keeps the link's extension, for writers that pick a format by it.
+        let png = s.0.join("fig.png");
+        std::os::unix::fs::symlink("figure", &png).unwrap();
+        write_atomic_path(&png, |tmp| {
+            assert_eq!(tmp.extension().unwrap(), "png");
+            fs::write(tmp, b"png").map_err(VizError::io(tmp))
+        })
+        .unwrap();
+        assert!(fs::symlink_metadata(&png).unwrap().is_symlink());
+        assert_eq!(fs::read(s.0.join("figure")).unwrap(), b"png");
+        assert_eq!(s.entries(), ["fig.png", "figure", "link.csv", "target.csv"]);
+    }
+
+    #[test]
+    fn a_link_loop_is_an_error_not_a_hang() {
+        let s = Scratch::new("loop");
+        let (a, b) = (s.0.join("a"), s.0.join("b"));
+        std::os::unix::fs::symlink("b", &a).unwrap();
+        std::os::unix::fs::symlink("a", &b).unwrap();
+        let err = write_atomic(&a, |_| Ok(())).unwrap_err();
+        assert!(err.to_string().contains("symbolic links"), "{err}");
+        assert_eq!(s.entries(), ["a", "b"]);
+    }
+
+    #[test]
+    fn a_directory_is_an_error_and_nothing_is_created() {
+        let s = Scratch::new("isdir");
+        let dir = s.0.join("d");
+        fs::create_dir(&dir).unwrap();
+        let err = write_atomic(&dir, |_| Ok(())).unwrap_err();
+        assert!(
+            matches!(&err, VizError::Io { path, .. } if *path == dir),
+            "{err}"
+        );
+        let err = write_atomic_path(&dir, |tmp| fs::write(tmp, b"x").map_err(VizError::io(tmp)))
+            .unwrap_err();
+        assert!(matches!(err, VizError::Io { .. }), "{err}");
+        assert_eq!(s.entries(), ["d"]);
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 0);
+    }
+
+    /// Errors name the path asked for: the temporary file is an implementation detail.
+    #[test]
+    fn errors_name_the_users_path_not_the_temporary_file() {
+        let s = Scratch::new("nodir");
+        let path = s.0.join("nodir/x.csv");
+        let err = write_atomic(&path, |_| Ok(())).unwrap_err();
+        assert!(
+            matches!(&err, VizError::Io { path: p, .. } if *p == path),
+            "{err}"
+        );
+        assert!(!err.to_string().contains(TEMP_MARKER), "{err}");
+        let err = write_atomic_path(&path, |_| Ok(())).unwrap_err();
+        assert!(
+            matches!(&err, VizError::Io { path: p, .. } if *p == path),
+            "{err}"
+        );
+        assert!(s.entries().is_empty());
+    }
+
+    fn is_char_device(path: &str) -> bool {
+        use std::os::unix::fs::FileTypeExt;
+        fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_char_device())
+    }
+
+    /// `/dev/null` and `/dev/full` are written in place: the first takes the bytes, the
+    /// second fails, and both stay devices (a rename would have replaced them, as root).
+    #[test]
+    fn devices_are_written_in_place() {
+        for dev in ["/dev/null", "/dev/full"] {
+            assert!(is_char_device(dev), "{dev} is not a character device");
+        }
+        let null = Path::new("/dev/null");
+        write_atomic(null, |w| w.write_all(b"gone").map_err(VizError::io(null))).unwrap();
+        write_atomic_path(null, |tmp| {
+            fs::write(tmp, b"gone").map_err(VizError::io(tmp))
+        })
+        .unwrap();
+        let full = Path::new("/dev/full");
+        let err = write_atomic(full, |w| {
+            w.write_all(&[0; 1 << 16]).map_err(VizError::io(full))
+        })
+        .unwrap_err();
+        assert!(err.to_string().contains("No space left"), "{err}");
+        let err = write_atomic_path(full, |tmp| fs::write(tmp, b"x").map_err(VizError::io(tmp)))
+            .unwrap_err();
+        assert!(
+            matches!(&err, VizError::Io { path, .. } if path == full),
+            "{err}"
+        );
+        for dev in ["/dev/null", "/dev/full"] {
+            assert!(is_char_device(dev), "{dev} was replaced");
+        }
+    }
+
+    /// A FIFO is written in place too: its reader gets the bytes, and it stays a FIFO.
+    #[test]
+    fn a_fifo_is_written_in_place() {
+        use std::os::unix::fs::FileTypeExt;
+        let s = Scratch::new("fifo");
+        let fifo = s.0.join("p");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if !made.is_ok_and(|st| st.success()) {
+            return; // no mkfifo on this system: nothing to test
+        }
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || fs::read(fifo).unwrap())
+        };
+        write_atomic(&fifo, |w| {
+            w.write_all(b"piped").map_err(VizError::io(&fifo))
+        })
+        .unwrap();
+        assert_eq!(reader.join().unwrap(), b"piped");
+        assert!(fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+        assert_eq!(s.entries(), ["p"]);
     }
 }

@@ -31,6 +31,7 @@ pub mod rrd;
 pub use error::{Result, VizError};
 
 use cli::{BenchCommand, Cli, Command};
+use cmd::print_line;
 
 /// Execute a parsed command line.
 ///
@@ -40,11 +41,11 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Report(args) => {
             let summary = report::run(&args)?;
-            println!(
+            print_line(format_args!(
                 "pf-viz: wrote {} section(s) to {}",
                 summary.sections.len(),
                 args.out.display()
-            );
+            ))?;
             Ok(())
         }
         Command::Bench(BenchCommand::Bootstrap(args)) => {
@@ -60,10 +61,10 @@ pub fn run(cli: Cli) -> Result<()> {
                 } else {
                     String::new()
                 };
-                println!(
+                print_line(format_args!(
                     "bootstrap AR(1): N = {}, n = {}, {} thread(s): {:.3} s{runs}, {:.2} ns per particle-step, log-likelihood {:.3}",
                     r.particles, r.steps, r.threads, r.seconds, r.ns_per_particle_step, r.loglik
-                );
+                ))?;
             }
             Ok(())
         }
@@ -72,7 +73,7 @@ pub fn run(cli: Cli) -> Result<()> {
             if args.json {
                 cmd::print_json(&r)?;
             } else {
-                println!(
+                print_line(format_args!(
                     "pruned path storage, N = {}, n = {}: peak {} nodes ({:.1} MB) against {:.1} MB for full storage; peak RSS {}; {:.1} s",
                     r.particles,
                     r.steps,
@@ -82,7 +83,7 @@ pub fn run(cli: Cli) -> Result<()> {
                     r.peak_rss_bytes
                         .map_or("unknown".into(), |b| format!("{:.1} MB", b as f64 / 1e6)),
                     r.seconds
-                );
+                ))?;
             }
             Ok(())
         }

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{Scratch, pf_viz, pf_viz_ok};
+use common::{Scratch, one_line_error, pf_viz, pf_viz_ok};
 
 #[test]
 fn bad_bench_arguments_exit_non_zero_with_nothing_on_stdout() {
@@ -161,4 +161,50 @@ fn bench_genealogy_prunes_dead_branches() {
     let o = pf_viz(&["bench", "genealogy", "--particles", "0", "--json"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(o.stdout.is_empty());
+}
+
+/// A thread count beyond the documented limit (1024) is refused at once, on one line,
+/// instead of spending minutes starting the threads.
+#[test]
+fn absurd_thread_counts_are_refused_before_any_work() {
+    // A usage error (exit 2) comes from parsing, before any pool is built.
+    for threads in ["1025", "10000", "18446744073709551615"] {
+        let args = [
+            "bench",
+            "bootstrap",
+            "--particles",
+            "10",
+            "--steps",
+            "1",
+            "--threads",
+            threads,
+        ];
+        let o = pf_viz(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        one_line_error(&o, &format!("{args:?}"), &["--threads", "1024"]);
+        assert!(o.stdout.is_empty());
+    }
+}
+
+/// Counts no machine can hold are one-line errors, not overflow panics or aborted
+/// allocations.
+#[test]
+fn absurd_sizes_are_one_line_errors() {
+    let max = "18446744073709551615";
+    for (sub, particles, steps) in [
+        ("bootstrap", "10", max),
+        ("genealogy", "10", max),
+        ("bootstrap", max, "5"),
+        ("bootstrap", "1000000000000", "5"),
+        ("genealogy", max, "5"),
+    ] {
+        let args = ["bench", sub, "--particles", particles, "--steps", steps];
+        let o = pf_viz(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        one_line_error(
+            &o,
+            &format!("{args:?}"),
+            &["more than this machine can hold"],
+        );
+    }
 }

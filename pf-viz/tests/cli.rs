@@ -203,3 +203,19 @@ fn bad_arguments_are_rejected() {
     }
     assert!(!Path::new("x").exists(), "no output for rejected arguments");
 }
+
+/// `--jobs` beyond the documented limit (1024) is a one-line usage error before the output
+/// directory is even created (4294967295 used to hang building the pool).
+#[test]
+fn absurd_job_counts_are_refused_before_any_work() {
+    let s = Scratch::new("jobs-limit");
+    let out = s.dir().join("r");
+    let out = out.to_str().unwrap();
+    for jobs in ["1025", "4294967295"] {
+        let args = ["report", "--out", out, "--only", "core", "--jobs", jobs];
+        let o = pf_viz(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        one_line_error(&o, &format!("{args:?}"), &["--jobs", "1024"]);
+        assert!(!Path::new(out).exists(), "nothing created");
+    }
+}

@@ -274,3 +274,20 @@ fn each_bad_input_gets_a_one_line_error_naming_line_and_problem() {
     assert_eq!(missing.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("/nonexistent/x.csv"));
 }
+
+/// `--online` prints a line per sample and `--json` promises one object, so together they
+/// are a one-line usage error, with nothing on stdout.
+#[test]
+fn online_and_json_conflict() {
+    let s = Scratch::new("online-json");
+    let csv = simulated(&s);
+    for args in [
+        ["dredge", "estimate", "--data", &csv, "--online", "--json"],
+        ["dredge", "estimate", "--data", &csv, "--json", "--online"],
+    ] {
+        let o = pf_viz(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        one_line_error(&o, &format!("{args:?}"), &["--online", "--json"]);
+        assert!(o.stdout.is_empty());
+    }
+}

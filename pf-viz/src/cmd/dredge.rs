@@ -5,10 +5,12 @@
 //! pf-viz dredge estimate --data FILE.csv [--particles N] [--seed S] [--runs R] [--json]
 //! pf-viz dredge estimate --data - --online [--particles N] [--seed S] [--runs R]
 //! ```
+//! `--online` prints one JSON line per sample, so it conflicts with `--json`, whose
+//! contract is exactly one object on stdout.
 //! The CSV format (header `t,V_t,m_t,Q_i,rho_i[,Q_o,rho_o]`) is [`pf_dredge::logfile`]'s;
 //! this module only wires files, stdin and stdout to it.
 
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
@@ -19,6 +21,7 @@ use pf_dredge::{
     estimate, simulate,
 };
 
+use crate::cmd::print_line;
 use crate::error::{Result, VizError};
 
 /// The subcommands of `pf-viz dredge`.
@@ -57,10 +60,11 @@ pub struct EstimateArgs {
     /// Independent filter runs; the estimate is their mean.
     #[arg(long, default_value_t = 1)]
     pub runs: usize,
-    /// On-line: print one JSON line `{"t","Q_o","rho_o"}` per input sample as it arrives.
-    #[arg(long)]
+    /// On-line: print one JSON line `{"t","Q_o","rho_o"}` per input sample as it arrives
+    /// (not with `--json`: that promises one object).
+    #[arg(long, conflicts_with = "json")]
     pub online: bool,
-    /// Print one JSON object on stdout (the file mode's contract).
+    /// Print one JSON object on stdout (the file mode's contract; not with `--online`).
     #[arg(long)]
     pub json: bool,
 }
@@ -97,14 +101,14 @@ fn run_simulate(a: &SimulateArgs) -> Result<()> {
             source: std::io::Error::other(e.to_string()),
         })
     })?;
-    println!(
+    print_line(format_args!(
         "pf-viz dredge: wrote {} samples ({} s, phase 2 from sample {}, phase 3 from sample {}) to {}",
         data.len(),
         data.t.last().copied().unwrap_or_default(),
         cycle.phase2_start.map_or("-".into(), |k| k.to_string()),
         cycle.phase3_start.map_or("-".into(), |k| k.to_string()),
         a.out.display()
-    );
+    ))?;
     Ok(())
 }
 
@@ -157,21 +161,21 @@ fn run_estimate(a: &EstimateArgs) -> Result<()> {
         return crate::cmd::print_json(&out);
     }
     let n = out.t.len();
-    println!(
+    print_line(format_args!(
         "pf-viz dredge: {n} samples, N = {}, {} run(s), seed {}; last estimate Q_o = {:.3} m³/s, rho_o = {:.1} kg/m³",
         a.particles,
         a.runs,
         a.seed,
         out.q_o[n - 1],
         out.rho_o[n - 1]
-    );
+    ))?;
     if let Some(r) = &out.residuals {
         for (name, unit, s) in [("Q_o", "m³/s", r.q_o), ("rho_o", "kg/m³", r.rho_o)] {
             if let Some(s) = s {
-                println!(
+                print_line(format_args!(
                     "  residual {name}: mean {:.3}, std {:.3}, max |·| {:.3} {unit}",
                     s.mean, s.std, s.max_abs
-                );
+                ))?;
             }
         }
     }
@@ -193,7 +197,6 @@ fn run_online(input: Box<dyn BufRead>, shown: &Path, cfg: &EstimateConfig) -> Re
         })
         .collect::<std::result::Result<Vec<_>, DredgeError>>()
         .map_err(&err)?;
-    let stdout = std::io::stdout();
     let r = cfg.runs as f64;
     for row in &mut rows {
         let row = row.map_err(&err)?;
@@ -214,10 +217,7 @@ fn run_online(input: Box<dyn BufRead>, shown: &Path, cfg: &EstimateConfig) -> Re
         let line = serde_json::to_string(&est).map_err(|e| VizError::Argument {
             message: format!("cannot serialise the estimate: {e}"),
         })?;
-        let mut out = stdout.lock();
-        writeln!(out, "{line}")
-            .and_then(|()| out.flush())
-            .map_err(VizError::io("<stdout>"))?;
+        print_line(line)?;
     }
     Ok(())
 }

@@ -17,7 +17,7 @@ use pf_epf::scenario::{Scenario, ScenarioConfig, simulate};
 use pf_epf::tracker::{Record, TrackerConfig, energies_at, track};
 use serde::Serialize;
 
-use crate::cmd::print_json;
+use crate::cmd::{print_json, print_line};
 use crate::error::{Result, VizError};
 use crate::io::{prepare_out_dir, write_atomic};
 
@@ -38,7 +38,7 @@ pub struct SimulateArgs {
     /// van-plane (2 targets), walking-men (3) or ants (6, sparse frames).
     #[arg(long, value_name = "NAME")]
     pub scenario: Scenario,
-    /// Mean number of clutter detections per tracked frame (Poisson).
+    /// Mean number of clutter detections per tracked frame (Poisson), 0 to 10⁴.
     #[arg(long, value_name = "F", default_value_t = 0.0)]
     pub clutter: f64,
     /// Probability that a target's detection is missed at a tracked frame.
@@ -339,14 +339,14 @@ fn run_simulate(a: &SimulateArgs) -> Result<()> {
     if a.json {
         print_json(&summary)
     } else {
-        println!(
+        print_line(format_args!(
             "{}: {} targets, {} detections over frames {:?}\nwrote {}",
             summary.scenario,
             summary.targets,
             summary.detections,
             summary.frames,
             summary.files.join(", ")
-        );
+        ))?;
         Ok(())
     }
 }
@@ -369,7 +369,7 @@ fn run_track(a: &TrackArgs) -> Result<()> {
     if a.tracker.json {
         return print_json(&result);
     }
-    println!(
+    print_line(format_args!(
         "{} ({}): {} targets over {} frames ({}..={})",
         a.association.name(),
         cfg.n_particles,
@@ -377,17 +377,17 @@ fn run_track(a: &TrackArgs) -> Result<()> {
         result.frames.len(),
         result.frames[0],
         result.frames[result.frames.len() - 1]
-    );
+    ))?;
     for t in &result.tracks {
         let hits = t.detection.iter().filter(|d| d.is_some()).count();
         let last = t.position[t.position.len() - 1];
-        println!(
+        print_line(format_args!(
             "  target {}: {hits}/{} frames associated, last position ({:.3}, {:.3})",
             t.target,
             t.detection.len(),
             last[0],
             last[1]
-        );
+        ))?;
     }
     Ok(())
 }
@@ -456,10 +456,10 @@ fn run_energies(a: &EnergiesArgs) -> Result<()> {
     if a.tracker.json {
         return print_json(&out);
     }
-    println!(
+    print_line(format_args!(
         "frame {}: α_l·E^l and E(k, y_j) (rows: targets, columns: detection rows {:?})",
         out.frame, out.detections
-    );
+    ))?;
     for (k, id) in out.targets.iter().enumerate() {
         let cells: Vec<String> = (0..out.detections.len())
             .map(|j| {
@@ -477,7 +477,7 @@ fn run_energies(a: &EnergiesArgs) -> Result<()> {
                 )
             })
             .collect();
-        println!("  T{id}: {}", cells.join("   "));
+        print_line(format_args!("  T{id}: {}", cells.join("   ")))?;
     }
     Ok(())
 }

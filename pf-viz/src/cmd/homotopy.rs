@@ -14,7 +14,7 @@ use pf_homotopy::experiments::{EllipsesConfig, RmseConfig, Scale, ellipses, rmse
 use pf_homotopy::filters::Algorithm;
 use pf_homotopy::model::ScenarioConfig;
 
-use super::print_json;
+use super::{print_json, print_line};
 use crate::error::{Result, VizError};
 
 /// The subcommands of `pf-viz homotopy`.
@@ -126,18 +126,18 @@ pub fn run(cmd: HomotopyCommand) -> Result<()> {
                 return print_json(&r);
             }
             let last = r.time.len() - 1;
-            println!(
+            print_line(format_args!(
                 "RMS position error at t = {} s over {} realisations (PF: N = {}):",
                 r.time[last], cfg.realisations, cfg.filters.particles
-            );
+            ))?;
             for alg in Algorithm::ALL {
                 let worst = r.final_errors.get(alg).iter().copied().fold(0.0, f64::max);
-                println!(
+                print_line(format_args!(
                     "  {:8} {:8.0} m   {:.4} s per run   worst final error {worst:.0} m",
                     alg.name(),
                     r.rmse.get(alg)[last],
                     r.seconds_per_run.get(alg)
-                );
+                ))?;
             }
             Ok(())
         }
@@ -152,15 +152,15 @@ pub fn run(cmd: HomotopyCommand) -> Result<()> {
             if a.json {
                 return print_json(&r);
             }
-            println!(
+            print_line(format_args!(
                 "OHF at sample {}: truth ({:.0}, {:.0}) m",
                 a.step, r.truth[0], r.truth[1]
-            );
+            ))?;
             for (l, e) in r.lambda.iter().zip(&r.ellipses) {
-                println!(
+                print_line(format_args!(
                     "  λ = {l:.2}: centre ({:.0}, {:.0}) m, semi-axes {:.0} × {:.0} m",
                     e.center[0], e.center[1], e.semi_axes[0], e.semi_axes[1]
-                );
+                ))?;
             }
             Ok(())
         }

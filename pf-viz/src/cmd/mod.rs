@@ -10,6 +10,7 @@ pub mod homotopy;
 pub mod mpf;
 pub mod smooth;
 
+use std::fmt::Display;
 use std::io::Write;
 
 use serde::Serialize;
@@ -20,13 +21,27 @@ use crate::error::{Result, VizError};
 ///
 /// # Errors
 /// [`VizError::Argument`] if the value cannot be serialised (a bug, reported not panicked);
-/// an I/O error if stdout is closed (a reader that stopped early), instead of a panic.
+/// otherwise as [`print_line`].
 pub fn print_json<T: Serialize + ?Sized>(value: &T) -> Result<()> {
     let json = serde_json::to_string(value).map_err(|e| VizError::Argument {
         message: format!("cannot serialise the result: {e}"),
     })?;
+    print_line(json)
+}
+
+/// Print one line of results on stdout and flush it; every result pf-viz prints goes
+/// through here, because `println!` panics when stdout cannot be written.
+///
+/// A closed stdout (a reader such as `head` that stopped early: broken pipe) is an error
+/// like any other, not a quiet success: the output was cut short, so the exit status says
+/// so, as a shell's `pipefail` expects.
+///
+/// # Errors
+/// [`VizError::Io`] naming `<stdout>` when the write or flush fails (broken pipe, full
+/// disk, closed descriptor).
+pub fn print_line(line: impl Display) -> Result<()> {
     let mut out = std::io::stdout().lock();
-    writeln!(out, "{json}")
+    writeln!(out, "{line}")
         .and_then(|()| out.flush())
         .map_err(VizError::io("<stdout>"))
 }

@@ -15,7 +15,7 @@ use pf_mpf::complexity::CtCase;
 use pf_mpf::experiments::{RatioConfig, Scale, TableConfig, TableReport, ratio, table2, table3};
 use serde::Serialize;
 
-use super::print_json;
+use super::{print_json, print_line};
 use crate::error::{Result, VizError};
 
 /// The subcommands of `pf-viz mpf`.
@@ -125,10 +125,10 @@ pub fn run(cmd: MpfCommand) -> Result<()> {
             if a.json {
                 print_json(&c)
             } else {
-                println!(
+                print_line(format_args!(
                     "one flop = {:.4} ns; c1 = {:.0} EF (likelihood), c2 = {:.0} EF (resampling), c3 = {:.0} EF (random number); the paper's Pentium: c1 = 445, c2 = 487, c3 = 125",
                     c.flop_ns, c.c1, c.c2, c.c3
-                );
+                ))?;
                 Ok(())
             }
         }
@@ -137,7 +137,9 @@ pub fn run(cmd: MpfCommand) -> Result<()> {
             if a.json {
                 return print_json(&r);
             }
-            println!("N(k)/N_PF at N_PF = 2000 with the paper's c1, c2, c3 (C_t = 0 / C_t ≠ 0):");
+            print_line(format_args!(
+                "N(k)/N_PF at N_PF = 2000 with the paper's c1, c2, c3 (C_t = 0 / C_t ≠ 0):"
+            ))?;
             for c in &r.curves {
                 let cells: Vec<String> = r
                     .m
@@ -145,7 +147,7 @@ pub fn run(cmd: MpfCommand) -> Result<()> {
                     .zip(c.ct_zero.iter().zip(&c.ct_nonzero))
                     .filter_map(|(m, (z, nz))| Some(format!("m={m}: {:.2}/{:.2}", (*z)?, (*nz)?)))
                     .collect();
-                println!("  k = {}: {}", c.k, cells.join(", "));
+                print_line(format_args!("  k = {}: {}", c.k, cells.join(", ")))?;
             }
             Ok(())
         }
@@ -169,18 +171,18 @@ pub fn run(cmd: MpfCommand) -> Result<()> {
             if a.json {
                 return print_json(&advice);
             }
-            println!(
+            print_line(format_args!(
                 "partitions of {} PF + {} linear states, best first:",
                 a.p, a.k
-            );
+            ))?;
             for o in &advice.options {
-                println!(
+                print_line(format_args!(
                     "  p = {}, k = {}: N = {}, {:.3} ms per step",
                     o.p,
                     o.k,
                     o.n_particles,
                     o.time_s * 1e3
-                );
+                ))?;
             }
             Ok(())
         }
@@ -221,12 +223,12 @@ fn table(
             reached: &r.reached,
         });
     }
-    println!(
+    print_line(format_args!(
         "Table {which}, N_MC = {} (paper's values in brackets):",
         cfg.n_mc
-    );
+    ))?;
     for (ours, paper) in r.table.partitions.iter().zip(&r.paper.partitions) {
-        println!("  {}", ours.against(paper));
+        print_line(format_args!("  {}", ours.against(paper)))?;
     }
     Ok(())
 }

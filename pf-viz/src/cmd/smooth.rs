@@ -14,7 +14,7 @@ use clap::{Args, Subcommand};
 use pf_smooth::experiments::{EmExperiment, ScoreExperiment, SemExperiment, em, score, sem};
 use pf_smooth::{SmoothError, Theta, ThetaSamples};
 
-use super::print_json;
+use super::{print_json, print_line};
 use crate::error::{Result, VizError};
 
 /// The subcommands of `pf-viz smooth`.
@@ -134,14 +134,14 @@ pub fn run(cmd: SmoothCommand) -> Result<()> {
             if c.json {
                 return print_json(&out);
             }
-            println!(
+            print_line(format_args!(
                 "EM update (10)–(12) from φ = {}, σ = {}, ρ = {}; n = {}, N = {}, R = {}",
                 c.phi, c.sigma, c.rho, out.n, c.particles, a.replications
-            );
-            print_theta("exact", &out.exact);
-            print_samples("joint (6)–(7)", &out.joint);
+            ))?;
+            print_theta("exact", &out.exact)?;
+            print_samples("joint (6)–(7)", &out.joint)?;
             if let (Some(f), Some(d)) = (&out.fixed_lag, a.lag) {
-                print_samples(&format!("fixed-lag δ = {d}"), f);
+                print_samples(&format!("fixed-lag δ = {d}"), f)?;
             }
             Ok(())
         }
@@ -162,16 +162,16 @@ pub fn run(cmd: SmoothCommand) -> Result<()> {
             if c.json {
                 return print_json(&out);
             }
-            println!(
+            print_line(format_args!(
                 "SEM, N = {}, {} iteration(s), {} chain(s), from φ = {}, σ = {}, ρ = {}",
                 c.particles, a.iterations, a.chains, c.phi, c.sigma, c.rho
-            );
+            ))?;
             if let Some(last) = out.exact.last() {
-                print_theta("exact EM, last iterate", last);
+                print_theta("exact EM, last iterate", last)?;
             }
             for (i, chain) in out.sem.iter().enumerate() {
                 if let Some(last) = chain.last() {
-                    print_theta(&format!("SEM chain {i}, last iterate"), last);
+                    print_theta(&format!("SEM chain {i}, last iterate"), last)?;
                 }
             }
             Ok(())
@@ -192,25 +192,25 @@ pub fn run(cmd: SmoothCommand) -> Result<()> {
             if c.json {
                 return print_json(&out);
             }
-            println!(
+            print_line(format_args!(
                 "Score ∇ℓ_n w.r.t. (φ, σ², ρ²) at φ = {}, σ = {}, ρ = {}; N = {}, R = {}",
                 c.phi, c.sigma, c.rho, c.particles, a.replications
-            );
-            print_theta("exact (Kalman/RTS)", &out.exact);
-            print_samples("particle (Fisher's identity)", &out.particle);
+            ))?;
+            print_theta("exact (Kalman/RTS)", &out.exact)?;
+            print_samples("particle (Fisher's identity)", &out.particle)?;
             Ok(())
         }
     }
 }
 
-fn print_theta(label: &str, t: &Theta) {
-    println!(
+fn print_theta(label: &str, t: &Theta) -> Result<()> {
+    print_line(format_args!(
         "  {label:<30} φ = {:>10.5}  σ² = {:>10.5}  ρ² = {:>10.5}",
         t.phi, t.sigma2, t.rho2
-    );
+    ))
 }
 
-fn print_samples(label: &str, s: &ThetaSamples) {
+fn print_samples(label: &str, s: &ThetaSamples) -> Result<()> {
     let ms = |v: &[f64]| {
         let (m, se) = pf_core::mc::mean_and_se(v);
         (m, se * (v.len() as f64).sqrt())
@@ -218,7 +218,7 @@ fn print_samples(label: &str, s: &ThetaSamples) {
     let (p, ps) = ms(&s.phi);
     let (s2, s2s) = ms(&s.sigma2);
     let (r2, r2s) = ms(&s.rho2);
-    println!(
+    print_line(format_args!(
         "  {label:<30} φ = {p:>10.5} ± {ps:.5}  σ² = {s2:>10.5} ± {s2s:.5}  ρ² = {r2:>10.5} ± {r2s:.5}  (mean ± sd)"
-    );
+    ))
 }

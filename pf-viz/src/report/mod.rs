@@ -218,6 +218,9 @@ pub fn select(only: &[String]) -> Result<Vec<&'static Section>> {
 /// The first failing section's error, or an I/O error naming the path at fault.
 pub fn run(args: &ReportArgs) -> Result<Summary> {
     let selected = select(&args.only)?;
+    if let Some(jobs) = args.jobs {
+        crate::cli::check_threads("--jobs", jobs as usize)?;
+    }
     prepare_out_dir(&args.out)?;
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(jobs) = args.jobs {

@@ -1,0 +1,201 @@
+//! Where `pf-viz` output goes when the destination is not a plain file or a reading pipe:
+//! a closed pipe or a full device on stdout, and `--out` on a link, a device or a directory.
+//! Every failure is one line on stderr and a non-zero exit, never a panic or a replaced node.
+
+mod common;
+
+use std::fs::{self, OpenOptions};
+use std::os::unix::fs::FileTypeExt;
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+
+use common::{BIN, Scratch, one_line_error, pf_viz, pf_viz_ok};
+
+/// Runs `pf-viz` with stdout on `stdout`, capturing stderr.
+fn pf_viz_to(args: &[&str], stdout: Stdio) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .stdout(stdout)
+        .stderr(Stdio::piped())
+        .output()
+        .expect("run pf-viz")
+}
+
+/// A pipe whose reading end is already closed, like `| head -1` once `head` has quit.
+fn closed_pipe() -> Stdio {
+    let (reader, writer) = std::io::pipe().expect("pipe");
+    drop(reader);
+    writer.into()
+}
+
+/// `/dev/full`, where every write fails with ENOSPC.
+fn dev_full() -> Stdio {
+    assert_char_device("/dev/full");
+    OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .expect("open /dev/full")
+        .into()
+}
+
+/// Fails loudly if a device node the tests rely on has been replaced.
+fn assert_char_device(path: &str) {
+    let t = fs::symlink_metadata(path).expect(path).file_type();
+    assert!(t.is_char_device(), "{path} is no longer a character device");
+}
+
+/// Every subcommand's plain-text output, plus one `--json`, with its input files in `s`.
+fn text_commands(s: &Scratch) -> Vec<Vec<String>> {
+    let mut y = String::from("t,y\n");
+    for k in 0..31 {
+        y.push_str(&format!("{k},{}\n", ((k as f64) * 2.3).cos()));
+    }
+    let y = s.file("y.csv", &y);
+    let cycle = s.path("cycle.csv");
+    pf_viz_ok(&["dredge", "simulate", "--out", &cycle]);
+    let ep = s.path("ep");
+    pf_viz_ok(&["epf", "simulate", "--scenario", "van-plane", "--out", &ep]);
+    let (det, init) = (format!("{ep}/detections.csv"), format!("{ep}/init.csv"));
+    let theta = "--phi 0.8 --sigma 0.5 --rho 2 --particles 10";
+    let lines = [
+        "bench bootstrap --particles 10 --steps 1".to_owned(),
+        "bench genealogy --particles 10 --steps 10".into(),
+        "mpf calibrate --quick".into(),
+        "mpf ratio".into(),
+        "mpf ratio --json".into(),
+        "mpf advise --p 1 --k 3000 --particles 10".into(),
+        "mpf table2 --scale quick --mc 1".into(),
+        "homotopy ellipses --step 17".into(),
+        "homotopy rmse --realisations 1 --particles 50 --scale quick".into(),
+        format!("smooth em --data {y} {theta} --replications 2 --lag 5"),
+        format!("smooth sem --data {y} {theta} --iterations 2 --chains 2"),
+        format!("smooth score --data {y} {theta} --replications 2"),
+        format!("dredge simulate --out {}", s.path("again.csv")),
+        format!("dredge estimate --data {cycle} --particles 20"),
+        format!("epf simulate --scenario van-plane --out {}", s.path("ep2")),
+        format!("epf track --data {det} --init {init} --particles 20"),
+        format!("epf energies --data {det} --init {init} --frame 2"),
+        format!(
+            "report --out {} --only core --scale quick --no-rrd",
+            s.path("rep")
+        ),
+    ];
+    lines
+        .iter()
+        .map(|l| l.split_whitespace().map(str::to_owned).collect())
+        .collect()
+}
+
+/// Each command writing to `stdout()` fails with exit status 1 and one line naming
+/// `<stdout>` and `reason`, not a panic (status 101 and a backtrace).
+fn each_fails_on_stdout(tag: &str, stdout: fn() -> Stdio, reason: &str) {
+    let s = Scratch::new(tag);
+    for args in text_commands(&s) {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = pf_viz_to(&args, stdout());
+        let what = format!("{args:?} > {tag}");
+        let err = one_line_error(&out, &what, &["<stdout>", reason]);
+        assert_eq!(out.status.code(), Some(1), "{what}: {err}");
+        assert!(err.starts_with("error: "), "{what}: {err}");
+    }
+}
+
+#[test]
+fn text_output_to_a_closed_pipe_is_a_one_line_error() {
+    each_fails_on_stdout("closed-pipe", closed_pipe, "Broken pipe");
+}
+
+#[test]
+fn text_output_to_a_full_device_is_a_one_line_error() {
+    each_fails_on_stdout("dev-full", dev_full, "No space left on device");
+    assert_char_device("/dev/full");
+}
+
+/// `--out` through a symbolic link replaces the link's target and keeps the link, also a
+/// relative link into another directory and a dangling one.
+#[test]
+fn out_through_a_symlink_writes_the_target_and_keeps_the_link() {
+    let s = Scratch::new("symlink");
+    let target = s.file("target.csv", "old\n");
+    let link = s.path("link.csv");
+    std::os::unix::fs::symlink("target.csv", &link).unwrap();
+    pf_viz_ok(&["dredge", "simulate", "--out", &link]);
+    assert!(
+        fs::symlink_metadata(&link).unwrap().is_symlink(),
+        "link kept"
+    );
+    let text = fs::read_to_string(&target).unwrap();
+    assert!(text.starts_with("t,V_t,m_t"), "target written: {text:.40}");
+
+    fs::create_dir(s.path("sub")).unwrap();
+    let deep = s.path("sub/deep.csv");
+    std::os::unix::fs::symlink("../fresh.csv", &deep).unwrap();
+    pf_viz_ok(&["dredge", "simulate", "--out", &deep]);
+    assert!(fs::symlink_metadata(&deep).unwrap().is_symlink());
+    assert!(
+        fs::read_to_string(s.path("fresh.csv"))
+            .unwrap()
+            .starts_with("t,")
+    );
+
+    let mut names: Vec<String> = fs::read_dir(s.dir())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["fresh.csv", "link.csv", "sub", "target.csv"]);
+}
+
+#[test]
+fn out_on_a_directory_fails_on_one_line_and_creates_nothing() {
+    let s = Scratch::new("dir");
+    let dir = s.path("d");
+    fs::create_dir(&dir).unwrap();
+    let out = pf_viz(&["dredge", "simulate", "--out", &dir]);
+    one_line_error(&out, "--out DIR", &[&dir, "directory"]);
+    assert!(out.stdout.is_empty());
+    assert_eq!(fs::read_dir(&dir).unwrap().count(), 0);
+    assert_eq!(fs::read_dir(s.dir()).unwrap().count(), 1, "only d");
+}
+
+/// `/dev/null` takes the bytes and stays a device (pf-viz run as root used to rename a
+/// regular file over it); `/dev/full` refuses them, on one line.
+#[test]
+fn out_on_a_device_is_written_in_place() {
+    assert_char_device("/dev/null");
+    pf_viz_ok(&["dredge", "simulate", "--out", "/dev/null"]);
+    assert_char_device("/dev/null");
+
+    assert_char_device("/dev/full");
+    let out = pf_viz(&["dredge", "simulate", "--out", "/dev/full"]);
+    one_line_error(
+        &out,
+        "--out /dev/full",
+        &["/dev/full", "No space left on device"],
+    );
+    assert!(out.stdout.is_empty(), "no success message");
+    assert_char_device("/dev/full");
+    assert!(
+        !fs::read_dir("/dev").unwrap().any(|e| e
+            .unwrap()
+            .file_name()
+            .to_string_lossy()
+            .contains(".tmp-")),
+        "no temporary file left in /dev"
+    );
+}
+
+/// A missing directory is reported on the path the user gave, not the temporary file.
+#[test]
+fn a_missing_directory_is_named_as_the_user_wrote_it() {
+    let s = Scratch::new("nodir");
+    let path = s.path("nodir/x.csv");
+    let out = pf_viz(&["dredge", "simulate", "--out", &path]);
+    let err = one_line_error(
+        &out,
+        "--out nodir/x.csv",
+        &[&format!("{path}: No such file")],
+    );
+    assert!(!err.contains(".tmp-"), "{err}");
+    assert!(!Path::new(&s.path("nodir")).exists());
+}
