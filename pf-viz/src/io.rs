@@ -249,6 +249,21 @@ pub fn write_json<T: Serialize + ?Sized>(path: &Path, value: &T) -> Result<()> {
     })
 }
 
+/// Check, before anything is written, that each of `paths` can be written as a file (not a
+/// directory, not a loop of links), so that a command writing several files fails before
+/// the first of them rather than after some. Each file is still written atomically; a
+/// failure while writing (a full disk) can leave the earlier ones new and the later ones
+/// old.
+///
+/// # Errors
+/// An I/O error naming the first path that cannot be written.
+pub fn check_writable<'a>(paths: impl IntoIterator<Item = &'a Path>) -> Result<()> {
+    for p in paths {
+        target(p)?;
+    }
+    Ok(())
+}
+
 /// Create the output directory (and its parents) and prove it is writable by creating and
 /// removing a probe file, before any work is done.
 ///

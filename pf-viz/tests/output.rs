@@ -199,3 +199,29 @@ fn a_missing_directory_is_named_as_the_user_wrote_it() {
     assert!(!err.contains(".tmp-"), "{err}");
     assert!(!Path::new(&s.path("nodir")).exists());
 }
+
+/// A command that writes several files checks them all first: one that cannot be written
+/// (here a directory in its place) fails the run before any of the others is replaced.
+#[test]
+fn a_set_of_files_fails_before_any_is_replaced() {
+    let s = Scratch::new("set");
+    let ep = s.path("ep");
+    fs::create_dir_all(format!("{ep}/truth.csv")).unwrap();
+    fs::write(format!("{ep}/detections.csv"), "old").unwrap();
+    let out = pf_viz(&["epf", "simulate", "--scenario", "van-plane", "--out", &ep]);
+    one_line_error(&out, "truth.csv a directory", &["truth.csv"]);
+    assert_eq!(
+        fs::read_to_string(format!("{ep}/detections.csv")).unwrap(),
+        "old"
+    );
+    assert!(!Path::new(&format!("{ep}/init.csv")).exists());
+
+    let r = s.path("r");
+    fs::create_dir_all(format!("{r}/index.html")).unwrap();
+    fs::write(format!("{r}/ess.png"), "old").unwrap();
+    let out = pf_viz(&[
+        "report", "--out", &r, "--scale", "quick", "--only", "core", "--no-rrd",
+    ]);
+    one_line_error(&out, "index.html a directory", &["index.html"]);
+    assert_eq!(fs::read_to_string(format!("{r}/ess.png")).unwrap(), "old");
+}

@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use crate::cmd::{print_json, print_line};
 use crate::error::{Result, VizError};
-use crate::io::{prepare_out_dir, write_atomic};
+use crate::io::{check_writable, prepare_out_dir, write_atomic};
 
 /// The subcommands of `pf-viz epf`.
 #[derive(Debug, Clone, Subcommand)]
@@ -291,6 +291,7 @@ fn run_simulate(a: &SimulateArgs) -> Result<()> {
     let det = a.out.join("detections.csv");
     let init = a.out.join("init.csv");
     let truth = a.out.join("truth.csv");
+    check_writable([det.as_path(), init.as_path(), truth.as_path()])?;
     write_csv(
         &det,
         "frame,x,y,target",

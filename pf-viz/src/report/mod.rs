@@ -23,7 +23,7 @@ use serde::Serialize;
 
 use crate::cli::{ReportArgs, RrdOutput};
 use crate::error::{Result, VizError};
-use crate::io::{prepare_out_dir, write_json};
+use crate::io::{check_writable, prepare_out_dir, write_json};
 use pf_core::mc::Scale;
 
 /// Every report section, in the order they run and appear in `summary.json`.
@@ -222,6 +222,10 @@ pub fn run(args: &ReportArgs) -> Result<Summary> {
         crate::cli::check_threads("--jobs", jobs as usize)?;
     }
     prepare_out_dir(&args.out)?;
+    // The pages are written last: a name among them that cannot be written fails the run
+    // before any figure is replaced.
+    let pages = [SUMMARY, INDEX, MARKDOWN].map(|f| args.out.join(f));
+    check_writable(pages.iter().map(PathBuf::as_path))?;
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(jobs) = args.jobs {
         pool = pool.num_threads(jobs as usize);
