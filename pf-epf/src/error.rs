@@ -64,14 +64,15 @@ pub enum EpfError {
     #[error("the init data hold no target")]
     NoTargets,
     /// A frame was asked for that the detections do not have after the init frames.
-    #[error("frame {frame} is not a tracked frame (tracked frames: {first}..={last})")]
+    #[error(
+        "frame {frame} is not a tracked frame (tracked frames: {})",
+        list_frames(tracked)
+    )]
     UnknownFrame {
         /// The requested frame.
         frame: i64,
-        /// First tracked frame (or 0 when none).
-        first: i64,
-        /// Last tracked frame (or 0 when none).
-        last: i64,
+        /// The tracked frames, in order (sparse in some scenarios, so a range would mislead).
+        tracked: Vec<i64>,
     },
     /// No detection lies after the init frames, so there is nothing to track.
     #[error("no detection lies after the last init frame {last_init}")]
@@ -83,3 +84,17 @@ pub enum EpfError {
 
 /// Result alias for pf-epf.
 pub type Result<T, E = EpfError> = std::result::Result<T, E>;
+
+/// The frames of an error message: all of them when few, else the first and last few.
+fn list_frames(frames: &[i64]) -> String {
+    let show = |f: &[i64]| f.iter().map(i64::to_string).collect::<Vec<_>>().join(", ");
+    match frames.len() {
+        0 => "none".into(),
+        n if n <= 12 => show(frames),
+        n => format!(
+            "{}, …, {} ({n} frames)",
+            show(&frames[..3]),
+            show(&frames[n - 3..])
+        ),
+    }
+}

@@ -26,10 +26,9 @@ pub fn position_errors(result: &TrackResult, sim: &Simulation) -> Result<Vec<Vec
                 .iter()
                 .zip(&tr.position)
                 .map(|(&f, p)| {
-                    let x = sim.truth_at(k, f).ok_or(EpfError::UnknownFrame {
+                    let x = sim.truth_at(k, f).ok_or_else(|| EpfError::UnknownFrame {
                         frame: f,
-                        first: sim.frames[0],
-                        last: *sim.frames.last().unwrap_or(&0),
+                        tracked: sim.frames.clone(),
                     })?;
                     Ok((Vec2::new(p[0], p[1]) - x).norm())
                 })

@@ -487,8 +487,7 @@ pub fn energies_at<R: Rng + ?Sized>(
     if !frames.contains(&frame) {
         return Err(EpfError::UnknownFrame {
             frame,
-            first: frames[0],
-            last: *frames.last().unwrap_or(&frames[0]),
+            tracked: frames,
         });
     }
     let mut tracker = Tracker::new(init, cfg, rng)?;
@@ -598,11 +597,11 @@ mod tests {
         );
         assert!(matches!(
             e,
-            Err(EpfError::UnknownFrame {
-                frame: 1,
-                first: 2,
-                last: 4
-            })
+            Err(EpfError::UnknownFrame { frame: 1, ref tracked }) if tracked == &[2, 3, 4]
         ));
+        assert_eq!(
+            e.unwrap_err().to_string(),
+            "frame 1 is not a tracked frame (tracked frames: 2, 3, 4)"
+        );
     }
 }
