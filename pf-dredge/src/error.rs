@@ -21,8 +21,8 @@ pub enum DredgeError {
         /// What the valid range is.
         reason: &'static str,
     },
-    /// The data set has no samples.
-    #[error("the data set is empty: at least {needed} samples are needed")]
+    /// The data set has fewer samples than the operation needs.
+    #[error("the data set has {got} sample(s): at least {needed} are needed")]
     TooFewSamples {
         /// How many samples the operation needs.
         needed: usize,

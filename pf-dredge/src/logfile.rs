@@ -73,7 +73,9 @@ impl<R: BufRead> CsvSamples<R> {
                 "the file is empty: expected a header `t,V_t,m_t,Q_i,rho_i`",
             ));
         }
+        // A UTF-8 byte-order mark (spreadsheets write one) is not part of the first name.
         let names: Vec<&str> = buf
+            .trim_start_matches('\u{feff}')
             .trim_end_matches(['\n', '\r'])
             .split(',')
             .map(str::trim)
@@ -342,6 +344,9 @@ mod tests {
         let mut out = Vec::new();
         write_csv(&d, &mut out).unwrap();
         assert_eq!(read_csv(out.as_slice()).unwrap(), d);
+        // A spreadsheet's byte-order mark before the header is not part of its first name.
+        let bom = read_csv("\u{feff}t,V_t,m_t,Q_i,rho_i\n0,1,2,3,4\n".as_bytes()).unwrap();
+        assert_eq!(bom.t, vec![0.0]);
         let d = read_csv("rho_i,Q_i,t,m_t,V_t,extra\n1,2,0,4,5,x\n1,,5,,6,y\n".as_bytes()).unwrap();
         assert_eq!(d.t, vec![0.0, 5.0]);
         assert_eq!(d.v_t, vec![Some(5.0), Some(6.0)]);

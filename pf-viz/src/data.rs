@@ -20,10 +20,7 @@ pub fn read_y(path: &Path, min_rows: usize) -> Result<Vec<f64>> {
         .from_path(path)
         .map_err(|e| bad(None, e.to_string()))?;
     let headers = reader.headers().map_err(|e| bad(Some(1), e.to_string()))?;
-    let col = headers
-        .iter()
-        .position(|h| h == "y")
-        .ok_or_else(|| bad(Some(1), "no `y` column in the header".into()))?;
+    let col = column(path, headers, "y")?;
     let mut ys = Vec::new();
     for record in reader.records() {
         let record = record.map_err(|e| {
@@ -50,6 +47,27 @@ pub fn read_y(path: &Path, min_rows: usize) -> Result<Vec<f64>> {
         ));
     }
     Ok(ys)
+}
+
+/// The index of the column `name` in a CSV file's `headers`. A missing column, or one named
+/// twice (which of the two was meant?), is an error on line 1 of `path`.
+///
+/// # Errors
+/// [`VizError::Data`] naming the file, line 1 and the column.
+pub(crate) fn column(path: &Path, headers: &csv::StringRecord, name: &str) -> Result<usize> {
+    let bad = |message: String| VizError::Data {
+        path: path.to_path_buf(),
+        line: Some(1),
+        message,
+    };
+    let mut hits = headers.iter().enumerate().filter(|(_, h)| *h == name);
+    let (first, _) = hits
+        .next()
+        .ok_or_else(|| bad(format!("no `{name}` column in the header")))?;
+    if hits.next().is_some() {
+        return Err(bad(format!("column `{name}` appears twice in the header")));
+    }
+    Ok(first)
 }
 
 #[cfg(test)]
@@ -88,5 +106,14 @@ mod tests {
                 .contains("at least 2")
         );
         assert!(read_y(Path::new("/nonexistent/x.csv"), 1).is_err());
+        let twice = file("twice.csv", "y,y\n1,2\n");
+        let e = read_y(&twice, 1).unwrap_err().to_string();
+        assert!(
+            e.contains("line 1") && e.contains("`y` appears twice"),
+            "{e}"
+        );
+        // A spreadsheet's byte-order mark is not part of the first column's name.
+        let bom = file("bom.csv", "\u{feff}y\n1\n");
+        assert_eq!(read_y(&bom, 1).unwrap(), vec![1.0]);
     }
 }

@@ -144,12 +144,7 @@ fn read_columns(path: &Path, columns: &[&str]) -> Result<CsvTable> {
         .clone();
     let idx = columns
         .iter()
-        .map(|c| {
-            headers
-                .iter()
-                .position(|h| h == *c)
-                .ok_or_else(|| data_err(path, Some(1), format!("no `{c}` column in the header")))
-        })
+        .map(|c| crate::data::column(path, &headers, c))
         .collect::<Result<Vec<_>>>()?;
     let mut table = CsvTable {
         rows: Vec::new(),
