@@ -11,7 +11,7 @@ pub enum EpfError {
     #[error(transparent)]
     Core(#[from] CoreError),
     /// A configuration parameter is outside its valid range.
-    #[error("invalid parameter {name} = {value}: {reason}")]
+    #[error("invalid parameter {name} = {}: {reason}", pf_core::error::Shown(*value))]
     InvalidParameter {
         /// Parameter name, as the paper writes it where possible.
         name: &'static str,

@@ -10,7 +10,7 @@ pub enum HomotopyError {
     #[error(transparent)]
     Core(#[from] pf_core::CoreError),
     /// A configuration value is outside its valid range.
-    #[error("invalid parameter {name} = {value}: {reason}")]
+    #[error("invalid parameter {name} = {}: {reason}", pf_core::error::Shown(*value))]
     InvalidParameter {
         /// Parameter name, as the paper writes it where possible.
         name: &'static str,

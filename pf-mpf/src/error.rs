@@ -19,7 +19,7 @@ pub enum MpfError {
         reason: &'static str,
     },
     /// A parameter outside its valid range.
-    #[error("invalid parameter {name} = {value}: {reason}")]
+    #[error("invalid parameter {name} = {}: {reason}", pf_core::error::Shown(*value))]
     InvalidParameter {
         /// The parameter, named as in the paper where possible.
         name: &'static str,
@@ -75,7 +75,9 @@ pub enum MpfError {
     },
     /// No particle count fits the requested time budget.
     #[error(
-        "time budget {budget_s} s is below the cost of one particle ({per_particle_s} s) for p = {p}, k = {k}"
+        "time budget {} s is below the cost of one particle ({} s) for p = {p}, k = {k}",
+        pf_core::error::Shown(*budget_s),
+        pf_core::error::Shown(*per_particle_s)
     )]
     BudgetTooSmall {
         /// The budget.

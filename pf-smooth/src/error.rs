@@ -11,7 +11,7 @@ pub enum SmoothError {
     #[error(transparent)]
     Core(#[from] CoreError),
     /// A parameter is outside its valid range.
-    #[error("invalid parameter {name} = {value}: {reason}")]
+    #[error("invalid parameter {name} = {}: {reason}", pf_core::error::Shown(*value))]
     InvalidParameter {
         /// The parameter, as the paper names it (`sigma`, `rho`, `N`, `delta`, …).
         name: &'static str,
