@@ -153,7 +153,7 @@ where
     F: FnOnce(&mut dyn Write) -> Result<()>,
 {
     match target(path)? {
-        Target::Special(dev) => write_buffered(open_special(&dev, path)?, false, path, write),
+        Target::Special(dev) => write_buffered(open_special(&dev, path)?, path, write),
         Target::File(real) => {
             let tmp = temp_path(&real, false);
             let mut guard = TempGuard::new(tmp.clone());
@@ -162,7 +162,8 @@ where
                 .create_new(true)
                 .open(&tmp)
                 .map_err(VizError::io(path))?;
-            write_buffered(file, true, path, write)?;
+            // `commit` syncs the file before renaming it.
+            write_buffered(file, path, write)?;
             commit(&tmp, &real, path)?;
             guard.disarm();
             Ok(())
@@ -170,20 +171,15 @@ where
     }
 }
 
-/// Run `write` on a buffered `file`, flush it and, if `sync`, `fsync` it (not a device:
-/// `/dev/null` cannot be synced); errors name `shown`.
-fn write_buffered<F>(file: File, sync: bool, shown: &Path, write: F) -> Result<()>
+/// Run `write` on a buffered `file` and flush it; errors name `shown`.
+fn write_buffered<F>(file: File, shown: &Path, write: F) -> Result<()>
 where
     F: FnOnce(&mut dyn Write) -> Result<()>,
 {
     let mut w = BufWriter::new(file);
     write(&mut w)?;
-    let file = w
-        .into_inner()
+    w.into_inner()
         .map_err(|e| VizError::io(shown)(e.into_error()))?;
-    if sync {
-        file.sync_all().map_err(VizError::io(shown))?;
-    }
     Ok(())
 }
 
