@@ -6,7 +6,7 @@ mod common;
 
 use std::fs::{self, OpenOptions};
 use std::os::unix::fs::FileTypeExt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 use common::{BIN, Scratch, one_line_error, pf_viz, pf_viz_ok};
@@ -158,30 +158,60 @@ fn out_on_a_directory_fails_on_one_line_and_creates_nothing() {
     assert_eq!(fs::read_dir(s.dir()).unwrap().count(), 1, "only d");
 }
 
-/// `/dev/null` takes the bytes and stays a device (pf-viz run as root used to rename a
-/// regular file over it); `/dev/full` refuses them, on one line.
+/// The character device `/dev/<name>` (major 1, `minor`) to test writes against. As root,
+/// `mknod` makes a node of the test's own in `dir`, so that a regression would replace that
+/// node and not the system's; for other users the system's, which they cannot replace
+/// either. `None` when a node was made but cannot be opened (a `nodev` mount).
+fn test_device(dir: &Path, name: &str, minor: u32) -> Option<PathBuf> {
+    let node = dir.join(name);
+    let made = Command::new("mknod")
+        .args(["-m", "666"])
+        .arg(&node)
+        .args(["c", "1", &minor.to_string()])
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|st| st.success());
+    if !made {
+        return Some(PathBuf::from(format!("/dev/{name}")));
+    }
+    OpenOptions::new()
+        .write(true)
+        .open(&node)
+        .is_ok()
+        .then_some(node)
+}
+
+/// A null device takes the bytes and stays a device (pf-viz run as root used to rename a
+/// regular file over `/dev/null`); a full one refuses them, on one line, and no temporary
+/// file is left beside either.
 #[test]
 fn out_on_a_device_is_written_in_place() {
-    assert_char_device("/dev/null");
-    pf_viz_ok(&["dredge", "simulate", "--out", "/dev/null"]);
-    assert_char_device("/dev/null");
+    let s = Scratch::new("dev");
+    let (Some(null), Some(full)) = (
+        test_device(s.dir(), "null", 3),
+        test_device(s.dir(), "full", 7),
+    ) else {
+        eprintln!("no device node to write to safely here: skipped");
+        return;
+    };
+    let (null, full) = (null.to_string_lossy(), full.to_string_lossy());
+    assert_char_device(&null);
+    pf_viz_ok(&["dredge", "simulate", "--out", &null]);
+    assert_char_device(&null);
 
-    assert_char_device("/dev/full");
-    let out = pf_viz(&["dredge", "simulate", "--out", "/dev/full"]);
-    one_line_error(
-        &out,
-        "--out /dev/full",
-        &["/dev/full", "No space left on device"],
-    );
+    assert_char_device(&full);
+    let out = pf_viz(&["dredge", "simulate", "--out", &full]);
+    one_line_error(&out, "--out full", &[&full, "No space left on device"]);
     assert!(out.stdout.is_empty(), "no success message");
-    assert_char_device("/dev/full");
+    assert_char_device(&full);
+    let parent = Path::new(&*null).parent().unwrap();
     assert!(
-        !fs::read_dir("/dev").unwrap().any(|e| e
+        !fs::read_dir(parent).unwrap().any(|e| e
             .unwrap()
             .file_name()
             .to_string_lossy()
             .contains(".tmp-")),
-        "no temporary file left in /dev"
+        "no temporary file left beside the devices"
     );
 }
 
