@@ -57,7 +57,7 @@ impl<T: Pod> ParticleBuf<T> {
         }
         Ok(ParticleBuf {
             store: Store::Heap(crate::limits::try_filled(
-                "the particle buffers",
+                crate::limits::PARTICLE_BUFFERS,
                 n,
                 T::zeroed(),
             )?),

@@ -8,6 +8,9 @@ use crate::error::{CoreError, Result};
 /// beyond any machine this runs on, so anything larger is a typing error.
 pub const MAX_COUNT: usize = 1 << 32;
 
+/// What the filters' particle arrays are called in a [`CoreError::TooLarge`].
+pub(crate) const PARTICLE_BUFFERS: &str = "the particle buffers";
+
 /// `n`, or [`CoreError::TooLarge`] naming `what` when it is above [`MAX_COUNT`].
 ///
 /// # Errors

@@ -2,7 +2,7 @@
 
 use super::{Bootstrap, Mutation, ResamplePolicy, RunSummary, StepAt, StepReport};
 use crate::error::{CoreError, Result};
-use crate::limits::{check_count, try_filled, try_with_capacity};
+use crate::limits::{PARTICLE_BUFFERS as PARTICLES, check_count, try_filled, try_with_capacity};
 use crate::model::{EuclideanState, StateSpaceModel};
 use crate::observe::{Observer, StepView};
 use crate::particles;
@@ -47,9 +47,6 @@ impl FilterConfig {
         self.policy.validate()
     }
 }
-
-/// What the filter's buffers are named in a [`CoreError::TooLarge`].
-const PARTICLES: &str = "the particle buffers";
 
 /// `0, 1, …, n − 1`: the identity ancestry.
 fn identity(n: usize) -> Result<Vec<usize>> {
