@@ -140,6 +140,38 @@ fn every_recording_loads_in_the_official_rerun_tools() {
     }
 }
 
+/// The layouts carry the view properties the SDK's builder cannot set: the dredger's four
+/// time series open on the whole cycle, and the views of moving scenes on fixed frames.
+#[test]
+fn recordings_open_on_whole_runs_and_fixed_frames() {
+    let Some(rerun) = std::env::var_os("PF_RERUN").filter(|_| cfg!(feature = "rrd")) else {
+        return;
+    };
+    let dir = report();
+    // (recording, blueprint property, views that carry it)
+    for (paper, property, views) in [
+        ("dredge", "TimeAxis", 4),
+        ("dredge", "VisualBounds2D", 1),
+        ("homotopy", "VisualBounds2D", 2),
+        ("smooth", "VisualBounds2D", 2),
+        ("smooth", "PlotLegend", 3),
+        ("genealogy", "VisualBounds2D", 1),
+    ] {
+        let o = Command::new(&rerun)
+            .args(["rrd", "print"])
+            .arg(dir.join(format!("{paper}.rrd")))
+            .output()
+            .expect("run the rerun CLI named by PF_RERUN");
+        assert!(o.status.success(), "rerun rrd print {paper}.rrd failed");
+        let listing = String::from_utf8_lossy(&o.stdout);
+        let found = listing
+            .lines()
+            .filter(|l| l.contains(&format!("/{property} - data columns")))
+            .count();
+        assert_eq!(found, views, "{paper}.rrd: views with {property}");
+    }
+}
+
 #[test]
 fn pages_carry_every_figure_and_need_no_network() {
     let dir = report();

@@ -13,12 +13,10 @@ use pf_dredge::EstimatorConfig;
 use pf_dredge::OnlineEstimator;
 use pf_dredge::model::{Q_O, RHO_O};
 use pf_dredge::simulator::Cycle;
-use rerun::blueprint::{
-    Blueprint, BlueprintActivation, Horizontal, Spatial2DView, TimeSeriesView, Vertical,
-};
 use rerun::components::Radius;
 use rerun::{Points2D, RecordingStream, Scalars, SeriesLines};
 
+use super::layout::{self, Bounds, Corner, Node, View};
 use super::{TIME, rrd_err, save_rrd};
 use crate::error::{Result, VizError};
 
@@ -29,6 +27,10 @@ const GREY: [u8; 4] = [160, 160, 160, 255];
 const GREEN: [u8; 4] = [60, 170, 90, 255];
 /// Plane scale of `Q_o`, so that 1 m³/s spans as much as 100 kg/m³.
 const Q_SCALE: f64 = 100.0;
+/// The `ρ_o` (kg/m³) below the plane where the `Q_o` ticks sit, and the `Q_o` (m³/s) left of
+/// it where the `ρ_o` ticks sit: apart enough that the corner labels do not overlap.
+const Q_TICKS_AT: f64 = 950.0;
+const RHO_TICKS_AT: f64 = -0.8;
 
 fn at(q: f64, rho: f64) -> [f32; 2] {
     [(q * Q_SCALE) as f32, (-rho) as f32]
@@ -67,9 +69,7 @@ fn log(
     seed: u64,
 ) -> Result<()> {
     let err = rrd_err(path);
-    blueprint()
-        .send(rec, BlueprintActivation::default())
-        .map_err(&err)?;
+    layout::send(rec, &blueprint(), Some(TIME)).map_err(&err)?;
     for (e, n, c) in [
         ("volume/measured", "V_t measured (m³)", GREY),
         ("volume/true", "V_t simulated (m³)", BLUE),
@@ -84,12 +84,10 @@ fn log(
     ] {
         series(rec, path, e, n, c)?;
     }
-    // Axis ticks of the cloud plane.
-    let q_ticks: Vec<f64> = (0..=3).map(|j| 4.0 * j as f64).collect();
-    let rho_ticks: Vec<f64> = (0..=6).map(|j| 1000.0 + 100.0 * j as f64).collect();
+    let (q_ticks, rho_ticks) = ticks();
     rec.log_static(
         format!("{ROOT}/cloud/axes/q"),
-        &Points2D::new(q_ticks.iter().map(|&q| at(q, 980.0)))
+        &Points2D::new(q_ticks.iter().map(|&q| at(q, Q_TICKS_AT)))
             .with_labels(q_ticks.iter().map(|q| format!("Q_o {q}")))
             .with_colors([GREY])
             .with_radii([Radius::new_ui_points(2.0)])
@@ -98,7 +96,7 @@ fn log(
     .map_err(&err)?;
     rec.log_static(
         format!("{ROOT}/cloud/axes/rho"),
-        &Points2D::new(rho_ticks.iter().map(|&r| at(-0.3, r)))
+        &Points2D::new(rho_ticks.iter().map(|&r| at(RHO_TICKS_AT, r)))
             .with_labels(rho_ticks.iter().map(|r| format!("ρ_o {r}")))
             .with_colors([GREY])
             .with_radii([Radius::new_ui_points(2.0)])
@@ -166,29 +164,40 @@ fn log(
     Ok(())
 }
 
-/// Signals on the left (volume, mass, flows, densities), the cloud on the right.
-fn blueprint() -> Blueprint {
-    Blueprint::new(
-        Horizontal::new([
-            Vertical::new([
-                TimeSeriesView::new("hopper volume V_t (m³)")
-                    .with_origin(format!("{ROOT}/signals/volume"))
-                    .into(),
-                TimeSeriesView::new("hopper mass m_t (kg)")
-                    .with_origin(format!("{ROOT}/signals/mass"))
-                    .into(),
-                TimeSeriesView::new("flow-rates Q_i, Q_o (m³/s)")
-                    .with_origin(format!("{ROOT}/signals/Q"))
-                    .into(),
-                TimeSeriesView::new("densities ρ_i, ρ_o (kg/m³)")
-                    .with_origin(format!("{ROOT}/signals/rho"))
-                    .into(),
-            ])
-            .into(),
-            Spatial2DView::new("particle cloud: x = Q_o × 100 (m³/s), y = −ρ_o (kg/m³)")
-                .with_origin(format!("{ROOT}/cloud"))
-                .into(),
-        ])
-        .with_column_shares([1.0, 1.0]),
+/// The cloud plane's axis ticks: `Q_o` (m³/s) and `ρ_o` (kg/m³).
+fn ticks() -> (Vec<f64>, Vec<f64>) {
+    (
+        (0..=3).map(|j| 4.0 * j as f64).collect(),
+        (0..=6).map(|j| 1000.0 + 100.0 * j as f64).collect(),
     )
+}
+
+/// Signals on the left (volume, mass, flows, densities), each over the whole cycle; the
+/// cloud on the right, on a fixed frame around the axis ticks, so that its motion shows.
+fn blueprint() -> Node {
+    let signal = |name: &str, entity: &str| {
+        // The lower right is empty in all four: the curves start low and end high or flat.
+        View::time_series(name, format!("{ROOT}/signals/{entity}"))
+            .with_whole_time()
+            .with_legend(Corner::RightBottom)
+            .into()
+    };
+    let (q, rho) = ticks();
+    let corners = [at(q[0], rho[0]), at(q[q.len() - 1], rho[rho.len() - 1])];
+    let frame = corners.into_iter().chain([at(RHO_TICKS_AT, Q_TICKS_AT)]);
+    layout::horizontal([
+        layout::vertical([
+            signal("hopper volume V_t (m³)", "volume"),
+            signal("hopper mass m_t (kg)", "mass"),
+            signal("flow-rates Q_i, Q_o (m³/s)", "Q"),
+            signal("densities ρ_i, ρ_o (kg/m³)", "rho"),
+        ]),
+        View::spatial_2d(
+            "particle cloud: x = Q_o × 100 (m³/s), y = −ρ_o (kg/m³)",
+            format!("{ROOT}/cloud"),
+        )
+        .with_bounds(Bounds::around(frame, 0.08))
+        .into(),
+    ])
+    .with_shares([1.0, 1.0])
 }

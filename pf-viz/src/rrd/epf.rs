@@ -14,10 +14,10 @@
 
 use std::path::Path;
 
-use rerun::blueprint::{Blueprint, BlueprintActivation, Horizontal, Spatial2DView, Vertical};
 use rerun::components::Radius;
 use rerun::{LineStrips2D, Points2D, RecordingStream};
 
+use super::layout::{self, Node, View};
 use super::{FRAME, rrd_err, save_rrd};
 use crate::error::Result;
 use crate::report::epf::{EpfReportResult, ScenarioResult};
@@ -49,9 +49,7 @@ fn method_path(label: &str) -> &'static str {
 /// A Rerun or I/O error naming `path`.
 pub fn save(path: &Path, result: &EpfReportResult) -> Result<()> {
     save_rrd(path, "pf-viz: energetic particle filter", |rec, path| {
-        blueprint(result)
-            .send(rec, BlueprintActivation::default())
-            .map_err(rrd_err(path))?;
+        layout::send(rec, &blueprint(result), Some(FRAME)).map_err(rrd_err(path))?;
         for s in &result.scenarios {
             log_scenario(rec, path, s)?;
         }
@@ -164,23 +162,21 @@ fn log_scenario(rec: &RecordingStream, path: &Path, s: &ScenarioResult) -> Resul
     Ok(())
 }
 
-fn blueprint(result: &EpfReportResult) -> Blueprint {
+fn blueprint(result: &EpfReportResult) -> Node {
     let rows = result.scenarios.iter().map(|s| {
         let root = format!("/epf/{}", s.scenario.name());
         let view = |method: &str, label: &str| {
-            Spatial2DView::new(format!("{}: {label}", s.scenario.name()))
-                .with_origin(root.clone())
+            View::spatial_2d(format!("{}: {label}", s.scenario.name()), root.clone())
                 .with_contents([
                     format!("+ {root}/scene/**"),
                     format!("+ {root}/{method}/**"),
                 ])
                 .into()
         };
-        Horizontal::new([
+        layout::horizontal([
             view("epf", "EPF (energy association)"),
             view("nnsf", "NNSF (nearest neighbour)"),
         ])
-        .into()
     });
-    Blueprint::new(Vertical::new(rows))
+    layout::vertical(rows)
 }

@@ -20,10 +20,10 @@
 use std::path::Path;
 
 use pf_core::genealogy::Genealogy;
-use rerun::blueprint::{Blueprint, BlueprintActivation, Spatial2DView, TimeSeriesView, Vertical};
 use rerun::components::Radius;
 use rerun::{LineStrips2D, Points2D, RecordingStream, Scalars, SeriesLines};
 
+use super::layout::{self, Bounds, Node, View};
 use super::{STEP, rrd_err, save_rrd};
 use crate::error::{Result, VizError};
 use crate::png::genealogy::GenealogyData;
@@ -55,12 +55,12 @@ pub struct GenealogyExtras<'a> {
 
 /// The picture's coordinates: `(k, −c·ξ)`.
 #[derive(Debug, Clone, Copy)]
-struct Frame {
+pub(super) struct Frame {
     c: f64,
 }
 
 impl Frame {
-    fn new(data: &GenealogyData) -> Self {
+    pub(super) fn new(data: &GenealogyData) -> Self {
         let (lo, hi) = data
             .positions
             .iter()
@@ -75,7 +75,7 @@ impl Frame {
         }
     }
 
-    fn at(&self, k: usize, x: f64) -> [f32; 2] {
+    pub(super) fn at(&self, k: usize, x: f64) -> [f32; 2] {
         [k as f32, (-self.c * x) as f32]
     }
 }
@@ -105,9 +105,7 @@ pub fn save(path: &Path, data: &GenealogyData, extras: &GenealogyExtras<'_>) -> 
         });
     }
     save_rrd(path, "pf-viz: particle genealogy", |rec, path| {
-        blueprint()
-            .send(rec, BlueprintActivation::default())
-            .map_err(rrd_err(path))?;
+        layout::send(rec, &blueprint(frame_bounds(data)), None).map_err(rrd_err(path))?;
         log_genealogy(rec, path, data, extras, PREFIX)
     })
 }
@@ -230,8 +228,22 @@ fn y_extent(data: &GenealogyData, frame: Frame) -> (f32, f32) {
     (lo - pad, hi + pad)
 }
 
+/// The picture with its axes and their labels, and a margin, for a view to open on.
+pub(super) fn frame_bounds(data: &GenealogyData) -> Option<Bounds> {
+    let frame = Frame::new(data);
+    let (top, bottom) = y_extent(data, frame);
+    let last = data.n_steps().saturating_sub(1) as f32;
+    // The ξ labels reach about 8 % of the width left of the axis, the k labels 6 % of the
+    // height below it.
+    let corners = [
+        [-0.08 * last.max(1.0), top],
+        [last, bottom + 0.06 * (bottom - top)],
+    ];
+    Bounds::around(corners, 0.03)
+}
+
 /// Static axes: a frame, ticks every ~10 % in `k`, and ticks at round values of `ξ`.
-fn log_axes(
+pub(super) fn log_axes(
     rec: &RecordingStream,
     data: &GenealogyData,
     frame: Frame,
@@ -312,18 +324,17 @@ fn fmt_tick(x: f64) -> String {
 }
 
 /// The layout the viewer opens on: the genealogy above, the ESS trace below.
-fn blueprint() -> Blueprint {
-    Blueprint::new(
-        Vertical::new([
-            Spatial2DView::new("particle genealogy (x: step k, y: position ξ, ticks labelled)")
-                .with_origin(ROOT)
-                .into(),
-            TimeSeriesView::new("effective sample size")
-                .with_origin(ESS)
-                .into(),
-        ])
-        .with_row_shares([3.0, 1.0]),
-    )
+fn blueprint(bounds: Option<Bounds>) -> Node {
+    layout::vertical([
+        View::spatial_2d(
+            "particle genealogy (x: step k, y: position ξ, ticks labelled)",
+            ROOT,
+        )
+        .with_bounds(bounds)
+        .into(),
+        View::time_series("effective sample size", ESS).into(),
+    ])
+    .with_shares([3.0, 1.0])
 }
 
 #[cfg(test)]

@@ -12,10 +12,10 @@ use std::path::Path;
 
 use pf_homotopy::experiments::EllipsesResult;
 use pf_homotopy::model::Realisation;
-use rerun::blueprint::{Blueprint, BlueprintActivation, Horizontal, Spatial2DView};
 use rerun::components::Radius;
 use rerun::{LineStrips2D, Points2D, RecordingStream};
 
+use super::layout::{self, Bounds, Node, View};
 use super::{LAMBDA, STEP, rrd_err, save_rrd};
 use crate::error::{Result, VizError};
 
@@ -62,9 +62,36 @@ fn log(
     real: &Realisation,
     estimates: &[(&str, Vec<[f64; 2]>)],
 ) -> rerun::RecordingStreamResult<()> {
-    blueprint().send(rec, BlueprintActivation::default())?;
     // Rerun's 2-D y axis points down: negate north so the picture has north up.
     let f = |p: [f64; 2]| [p[0] as f32, -p[1] as f32];
+    let outlines: Vec<Vec<[f32; 2]>> = ell
+        .ellipses
+        .iter()
+        .map(|e| {
+            let outline = pf_core::gaussian::ErrorEllipse {
+                centre: e.center,
+                semi_axes: e.semi_axes,
+                angle: e.angle,
+            }
+            .points(72);
+            let mut strip: Vec<[f32; 2]> = outline.iter().map(|&p| f(p)).collect();
+            strip.push(strip[0]);
+            strip
+        })
+        .collect();
+    // Fixed frames: every ellipse with the truth, and both whole tracks, so that the views
+    // show the motion instead of following it.
+    let ellipse_frame = outlines.iter().flatten().copied().chain([f(ell.truth)]);
+    let track_frame =
+        (real.target.iter().map(|x| f([x[0], x[1]]))).chain(real.observer.iter().map(|o| f(o.pos)));
+    layout::send(
+        rec,
+        &blueprint(
+            Bounds::around(track_frame, 0.06),
+            Bounds::around(ellipse_frame, 0.06),
+        ),
+        None,
+    )?;
     rec.log_static(
         "homotopy/ellipse/truth",
         &Points2D::new([f(ell.truth)])
@@ -72,16 +99,8 @@ fn log(
             .with_radii([Radius::new_ui_points(5.0)])
             .with_labels(["true position"]),
     )?;
-    for (l, e) in ell.lambda.iter().zip(&ell.ellipses) {
+    for ((l, e), strip) in ell.lambda.iter().zip(&ell.ellipses).zip(outlines) {
         rec.set_time_sequence(LAMBDA, (l * 1000.0).round() as i64);
-        let outline = pf_core::gaussian::ErrorEllipse {
-            centre: e.center,
-            semi_axes: e.semi_axes,
-            angle: e.angle,
-        }
-        .points(72);
-        let mut strip: Vec<[f32; 2]> = outline.iter().map(|&p| f(p)).collect();
-        strip.push(strip[0]);
         rec.log(
             "homotopy/ellipse/lambda",
             &LineStrips2D::new([strip])
@@ -144,15 +163,19 @@ fn log(
     Ok(())
 }
 
-fn blueprint() -> Blueprint {
-    Blueprint::new(Horizontal::new([
-        Spatial2DView::new(
+fn blueprint(track: Option<Bounds>, ellipses: Option<Bounds>) -> Node {
+    layout::horizontal([
+        View::spatial_2d(
             "tracking run: target, observer, bearing, estimates (m, north up; step)",
+            "homotopy/scene",
         )
-        .with_origin("homotopy/scene")
+        .with_bounds(track)
         .into(),
-        Spatial2DView::new("OHF ellipse at sample 17 as λ goes 0 → 1 (m, north up; lambda × 1000)")
-            .with_origin("homotopy/ellipse")
-            .into(),
-    ]))
+        View::spatial_2d(
+            "OHF ellipse at sample 17 as λ goes 0 → 1 (m, north up; lambda × 1000)",
+            "homotopy/ellipse",
+        )
+        .with_bounds(ellipses)
+        .into(),
+    ])
 }

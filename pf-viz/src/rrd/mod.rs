@@ -12,6 +12,7 @@
 //! | [`homotopy`] | `homotopy.rrd`: ellipses on `lambda`; scenario and estimates on `step` |
 //! | [`dredge`] | `dredge.rrd`: signals and the (Q_o, ρ_o) cloud on `time` |
 //! | [`epf`] | `epf.rrd`: detections, clouds, associations, gates on `frame` |
+//! | [`layout`] | the blueprint each recording opens on, with its views' bounds, time ranges and legends |
 //!
 //! Entity paths start with the paper's name (`smooth/genealogy/lineage_3`,
 //! `homotopy/ellipse/lambda`).
@@ -20,6 +21,7 @@ pub mod dredge;
 pub mod epf;
 pub mod genealogy;
 pub mod homotopy;
+pub mod layout;
 pub mod mpf;
 pub mod smooth;
 

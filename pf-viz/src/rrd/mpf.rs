@@ -9,18 +9,20 @@
 use std::path::Path;
 
 use pf_mpf::radar::{RadarState, RunTrace};
-use rerun::blueprint::{Blueprint, BlueprintActivation, Grid, Spatial2DView};
 use rerun::components::Radius;
 use rerun::{LineStrips2D, Points2D, RecordingStream};
 
+use super::layout::{self, Node, View};
 use super::{STEP, rrd_err, save_rrd};
 use crate::error::{Result, VizError};
 
 const PARTICLE: [u8; 4] = [150, 150, 150, 255];
 const ESTIMATE: [u8; 4] = [40, 90, 200, 255];
 const TRUTH: [u8; 4] = [220, 50, 50, 255];
-/// Steps of true trajectory drawn behind the current position.
-const TRAIL: usize = 4;
+/// Steps of true trajectory drawn behind the current position: one, since the view frames
+/// everything it shows, and a step is about as long as the cloud is wide (with four, the
+/// cloud took a sixth of the view).
+const TRAIL: usize = 1;
 
 /// Index of each state name in `[p_x p_y v_x v_y a_x a_y]`.
 fn state_index(name: &str) -> Option<usize> {
@@ -59,7 +61,7 @@ fn log(
     truth: &[RadarState],
     runs: &[(String, RunTrace)],
 ) -> rerun::RecordingStreamResult<()> {
-    blueprint(runs).send(rec, BlueprintActivation::default())?;
+    layout::send(rec, &blueprint(runs), Some(STEP))?;
     for (name, tr) in runs {
         // The first two KF states, when they form a pair (vx vy or ax ay).
         let kf_pair = match tr.kf_states.as_slice() {
@@ -124,27 +126,31 @@ fn log(
     Ok(())
 }
 
-/// Position views in the first row, KF views in the second.
-fn blueprint(runs: &[(String, RunTrace)]) -> Blueprint {
-    let mut views: Vec<rerun::blueprint::ContainerLike> = runs
+/// Position views in the first row, KF views in the second. They follow the cloud (the
+/// viewer's own framing): the target crosses kilometres, the cloud spans metres.
+fn blueprint(runs: &[(String, RunTrace)]) -> Node {
+    let positions = runs.iter().map(|(name, _)| {
+        View::spatial_2d(
+            format!("{name}: particles [px, py] (m)"),
+            format!("mpf/{name}/position"),
+        )
+        .into()
+    });
+    let kf = runs
         .iter()
-        .map(|(name, _)| {
-            Spatial2DView::new(format!("{name}: particles [px, py] (m)"))
-                .with_origin(format!("mpf/{name}/position"))
-                .into()
-        })
-        .collect();
-    views.extend(
-        runs.iter()
-            .filter(|(_, tr)| tr.kf_states.len() >= 2)
-            .map(|(name, tr)| {
-                Spatial2DView::new(format!(
+        .filter(|(_, tr)| tr.kf_states.len() >= 2)
+        .map(|(name, tr)| {
+            View::spatial_2d(
+                format!(
                     "{name}: KF means [{}, {}]",
                     tr.kf_states[0], tr.kf_states[1]
-                ))
-                .with_origin(format!("mpf/{name}/kf"))
-                .into()
-            }),
-    );
-    Blueprint::new(Grid::new(views).with_grid_columns(runs.len().max(1) as u32))
+                ),
+                format!("mpf/{name}/kf"),
+            )
+            .into()
+        });
+    layout::grid(
+        runs.len().max(1) as u32,
+        positions.chain(kf).collect::<Vec<Node>>(),
+    )
 }

@@ -5,6 +5,7 @@
 //! |---|---|---|
 //! | `smooth/genealogy/…`, `smooth/ess` | as in [`rrd::genealogy`](super::genealogy) | the genealogy of Fig. 1 and its ESS on `step` (the shared logger) |
 //! | `smooth/genealogy_final/{all,lineages}` | `LineStrips2D` | static: the whole genealogy and the surviving lineages |
+//! | `smooth/genealogy_final/axes/…` | as in [`rrd::genealogy`](super::genealogy) | static: the same axes and ticks |
 //! | `smooth/sem/<param>/chain_<c>` | `Scalars` | SEM chain `c` at each iteration |
 //! | `smooth/sem/<param>/exact` | `Scalars` | the exact EM trajectory |
 //!
@@ -18,14 +19,11 @@ use std::path::Path;
 
 use pf_smooth::Theta;
 use pf_smooth::experiments::SemResult;
-use rerun::blueprint::{
-    Blueprint, BlueprintActivation, Horizontal, Spatial2DView, Tabs, TimePanel, TimeSeriesView,
-    Vertical,
-};
 use rerun::components::Radius;
 use rerun::{LineStrips2D, RecordingStream, Scalars, SeriesLines};
 
-use super::genealogy::{GenealogyExtras, log_genealogy};
+use super::genealogy::{Frame, GenealogyExtras, frame_bounds, log_axes, log_genealogy};
+use super::layout::{self, Bounds, Corner, Node, View};
 use super::{ITERATION, rrd_err, save_rrd};
 use crate::error::Result;
 use crate::png::genealogy::GenealogyData;
@@ -68,9 +66,7 @@ pub fn save(
     genealogy.validate()?;
     save_rrd(path, "pf-viz: smooth (Cappé & Moulines)", |rec, path| {
         let err = rrd_err(path);
-        blueprint(sem.sem.len())
-            .send(rec, BlueprintActivation::default())
-            .map_err(&err)?;
+        layout::send(rec, &blueprint(frame_bounds(genealogy)), Some(ITERATION)).map_err(&err)?;
         log_genealogy(rec, path, genealogy, extras, "smooth")?;
         log_final(rec, genealogy).map_err(&err)?;
         log_sem(rec, sem).map_err(&err)?;
@@ -78,18 +74,13 @@ pub fn save(
     })
 }
 
-/// The genealogy at its last step, static, so that it shows on the `iteration` timeline too.
+/// The genealogy at its last step, static, so that it shows on the `iteration` timeline too,
+/// in the same frame and with the same axes as the step-by-step one.
 fn log_final(rec: &RecordingStream, data: &GenealogyData) -> rerun::RecordingStreamResult<()> {
     let (steps, n) = (data.n_steps(), data.n_particles());
-    let (lo, hi) = data
-        .positions
-        .iter()
-        .flatten()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-            (a.min(x), b.max(x))
-        });
-    let c = 0.4 * (steps.max(2) - 1) as f64 / (hi - lo).max(1e-9);
-    let at = |k: usize, x: f64| [k as f32, (-c * x) as f32];
+    let frame = Frame::new(data);
+    log_axes(rec, data, frame, FINAL)?;
+    let at = |k: usize, x: f64| frame.at(k, x);
     let at_idx = |j: usize, idx: usize| at(j, data.positions[j][idx]);
     let mut segments: Vec<[[f32; 2]; 2]> = Vec::with_capacity(n * steps);
     // lineages[i][j]: index at step j of the ancestor of particle i of the current step.
@@ -174,26 +165,31 @@ fn log_sem(rec: &RecordingStream, sem: &SemResult) -> rerun::RecordingStreamResu
 
 /// The genealogy on the left (final picture; a tab plays it on `step`), the three SEM
 /// parameters stacked on the right, on the `iteration` timeline.
-fn blueprint(_chains: usize) -> Blueprint {
-    Blueprint::new(
-        Horizontal::new([
-            Tabs::new([
-                Spatial2DView::new("genealogy, N = 50, all steps (x: step k, y: position ξ)")
-                    .with_origin(FINAL)
-                    .into(),
-                Spatial2DView::new("genealogy step by step (select the `step` timeline)")
-                    .with_origin(GENEALOGY)
-                    .into(),
-            ])
-            .into(),
-            Vertical::new(PARAMS.iter().map(|(p, name, _)| {
-                TimeSeriesView::new(format!("SEM chains and exact EM: {name}"))
-                    .with_origin(format!("{SEM}/{p}"))
-                    .into()
-            }))
-            .into(),
-        ])
-        .with_column_shares([3.0, 2.0]),
-    )
-    .with_time_panel(TimePanel::new().with_timeline(ITERATION))
+fn blueprint(genealogy: Option<Bounds>) -> Node {
+    let genealogy_view =
+        |name: &str, origin: &str| View::spatial_2d(name, origin).with_bounds(genealogy).into();
+    layout::horizontal([
+        layout::tabs([
+            genealogy_view(
+                "genealogy, N = 50, all steps (x: step k, y: position ξ)",
+                FINAL,
+            ),
+            genealogy_view(
+                "genealogy step by step (select the `step` timeline)",
+                GENEALOGY,
+            ),
+        ]),
+        layout::vertical(PARAMS.iter().zip(LEGENDS).map(|((p, name, _), corner)| {
+            View::time_series(
+                format!("SEM chains and exact EM: {name}"),
+                format!("{SEM}/{p}"),
+            )
+            .with_legend(corner)
+            .into()
+        })),
+    ])
+    .with_shares([3.0, 2.0])
 }
+
+/// Where each parameter's legend covers no curve: φ rises from its start, σ² and ρ² fall.
+const LEGENDS: [Corner; 3] = [Corner::RightBottom, Corner::RightTop, Corner::RightTop];
