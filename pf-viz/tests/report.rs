@@ -153,6 +153,7 @@ fn recordings_open_on_whole_runs_and_fixed_frames() {
         ("dredge", "TimeAxis", 4),
         ("dredge", "VisualBounds2D", 1),
         ("homotopy", "VisualBounds2D", 2),
+        ("mpf", "VisualBounds2D", 1),
         ("smooth", "VisualBounds2D", 2),
         ("smooth", "PlotLegend", 3),
         ("genealogy", "VisualBounds2D", 1),

@@ -4,7 +4,9 @@
 //! sized by weight, the filter's estimate and the true position with a short trail; the KF view
 //! shows the mean that each particle's Kalman filter holds for its first two linear states
 //! (velocities, or accelerations for `PPPPKK`), with the true values. The standard PF
-//! (`PPPPPP`) has no KF view. The blueprint lays the partitions out side by side.
+//! (`PPPPPP`) has no KF view. The blueprint lays the partitions out side by side, and fills
+//! the last cell with the whole true track (`mpf/track/truth`, static) and each partition's
+//! estimated track up to the current step (`mpf/track/<partition>`).
 
 use std::path::Path;
 
@@ -12,13 +14,21 @@ use pf_mpf::radar::{RadarState, RunTrace};
 use rerun::components::Radius;
 use rerun::{LineStrips2D, Points2D, RecordingStream};
 
-use super::layout::{self, Node, View};
+use super::layout::{self, Bounds, Node, View};
 use super::{STEP, rrd_err, save_rrd};
 use crate::error::{Result, VizError};
 
 const PARTICLE: [u8; 4] = [150, 150, 150, 255];
 const ESTIMATE: [u8; 4] = [40, 90, 200, 255];
 const TRUTH: [u8; 4] = [220, 50, 50, 255];
+/// The estimated tracks in the overview, one colour per partition, named in the view's title
+/// (the 2-D view has no legend, and labels on tracks this close overlap).
+const TRACKS: [(&str, [u8; 4]); 4] = [
+    ("blue", [90, 160, 255, 255]),
+    ("green", [120, 220, 120, 255]),
+    ("magenta", [230, 90, 230, 255]),
+    ("white", [240, 240, 240, 255]),
+];
 /// Steps of true trajectory drawn behind the current position: one, since the view frames
 /// everything it shows, and a step is about as long as the cloud is wide (with four, the
 /// cloud took a sixth of the view).
@@ -61,7 +71,39 @@ fn log(
     truth: &[RadarState],
     runs: &[(String, RunTrace)],
 ) -> rerun::RecordingStreamResult<()> {
-    layout::send(rec, &blueprint(runs), Some(STEP))?;
+    let xy = |x: &RadarState| [x[0] as f32, x[1] as f32];
+    let track: Vec<[f32; 2]> = truth.iter().map(xy).collect();
+    layout::send(
+        rec,
+        &blueprint(runs, Bounds::around(track.iter().copied(), 0.05)),
+        Some(STEP),
+    )?;
+    rec.log_static(
+        "mpf/track/truth",
+        &LineStrips2D::new([track])
+            .with_colors([TRUTH])
+            .with_radii([Radius::new_ui_points(1.0)]),
+    )?;
+    for (t, x) in truth.iter().enumerate() {
+        rec.set_time_sequence(STEP, t as i64);
+        rec.log(
+            "mpf/track/target",
+            &Points2D::new([xy(x)])
+                .with_colors([TRUTH])
+                .with_radii([Radius::new_ui_points(4.0)]),
+        )?;
+        for ((name, tr), (_, color)) in runs.iter().zip(TRACKS.iter().cycle()) {
+            rec.log(
+                format!("mpf/track/{name}"),
+                &LineStrips2D::new([tr.estimates[..=t]
+                    .iter()
+                    .map(|e| [e[0] as f32, e[1] as f32])
+                    .collect::<Vec<_>>()])
+                .with_colors([*color])
+                .with_radii([Radius::new_ui_points(1.0)]),
+            )?;
+        }
+    }
     for (name, tr) in runs {
         // The first two KF states, when they form a pair (vx vy or ax ay).
         let kf_pair = match tr.kf_states.as_slice() {
@@ -126,9 +168,10 @@ fn log(
     Ok(())
 }
 
-/// Position views in the first row, KF views in the second. They follow the cloud (the
+/// Position views in the first row, KF views in the second, then the whole track with every
+/// partition's estimates on a fixed frame. The position and KF views follow the cloud (the
 /// viewer's own framing): the target crosses kilometres, the cloud spans metres.
-fn blueprint(runs: &[(String, RunTrace)]) -> Node {
+fn blueprint(runs: &[(String, RunTrace)], track: Option<Bounds>) -> Node {
     let positions = runs.iter().map(|(name, _)| {
         View::spatial_2d(
             format!("{name}: particles [px, py] (m)"),
@@ -149,8 +192,19 @@ fn blueprint(runs: &[(String, RunTrace)]) -> Node {
             )
             .into()
         });
+    let key: Vec<String> = runs
+        .iter()
+        .zip(TRACKS.iter().cycle())
+        .map(|((name, _), (colour, _))| format!("{name} {colour}"))
+        .collect();
+    let overview = View::spatial_2d(
+        format!("track (m): truth red; {}", key.join(", ")),
+        "mpf/track",
+    )
+    .with_bounds(track)
+    .into();
     layout::grid(
         runs.len().max(1) as u32,
-        positions.chain(kf).collect::<Vec<Node>>(),
+        positions.chain(kf).chain([overview]).collect::<Vec<Node>>(),
     )
 }
