@@ -4,9 +4,11 @@
 //!   parameterisation at sample 17 (`homotopy/ellipse/lambda`) and the true position.
 //! - `step` timeline: target and observer with their trails, the measured bearing as a ray
 //!   from the observer (`homotopy/scene/bearing`), and every filter's estimate
-//!   (`homotopy/scene/estimate/<filter>`).
+//!   (`homotopy/scene/estimate/<filter>`). The last sample is logged again at λ = 0, so
+//!   that the `lambda` timeline shows the finished run beside the ellipse.
 //!
-//! The blueprint shows the two as side-by-side 2-D views.
+//! The blueprint shows the two as side-by-side 2-D views, each on a fixed frame, and opens
+//! on the `lambda` timeline.
 
 use std::path::Path;
 
@@ -62,8 +64,7 @@ fn log(
     real: &Realisation,
     estimates: &[(&str, Vec<[f64; 2]>)],
 ) -> rerun::RecordingStreamResult<()> {
-    // Rerun's 2-D y axis points down: negate north so the picture has north up.
-    let f = |p: [f64; 2]| [p[0] as f32, -p[1] as f32];
+    let f = north_up;
     let outlines: Vec<Vec<[f32; 2]>> = ell
         .ellipses
         .iter()
@@ -90,7 +91,7 @@ fn log(
             Bounds::around(track_frame, 0.06),
             Bounds::around(ellipse_frame, 0.06),
         ),
-        None,
+        Some(LAMBDA),
     )?;
     rec.log_static(
         "homotopy/ellipse/truth",
@@ -115,50 +116,76 @@ fn log(
                 .with_radii([Radius::new_ui_points(3.0)]),
         )?;
     }
-    for k in 0..real.target.len() {
+    // The run on `step` alone; its last sample again at λ = 0, so that on the `lambda`
+    // timeline the tracking view holds the finished run while the ellipse changes.
+    rec.reset_time();
+    let n = real.target.len();
+    for k in 0..n {
         rec.set_time_sequence(STEP, k as i64 + 1);
-        let x = real.target[k];
-        let o = real.observer[k].pos;
-        let target_trail: Vec<[f32; 2]> =
-            real.target[..=k].iter().map(|x| f([x[0], x[1]])).collect();
-        let observer_trail: Vec<[f32; 2]> = real.observer[..=k].iter().map(|o| f(o.pos)).collect();
+        log_sample(rec, real, estimates, k)?;
+    }
+    if let Some(last) = n.checked_sub(1) {
+        rec.set_time_sequence(LAMBDA, 0);
+        log_sample(rec, real, estimates, last)?;
+    }
+    Ok(())
+}
+
+/// Picture coordinates of a position: Rerun's 2-D y axis points down, so north is negated
+/// to put it up.
+fn north_up(p: [f64; 2]) -> [f32; 2] {
+    [p[0] as f32, -p[1] as f32]
+}
+
+/// Sample `k` of the tracking run: target, observer, their trails, the bearing and every
+/// filter's estimate, at the current time.
+fn log_sample(
+    rec: &RecordingStream,
+    real: &Realisation,
+    estimates: &[(&str, Vec<[f64; 2]>)],
+    k: usize,
+) -> rerun::RecordingStreamResult<()> {
+    let f = north_up;
+    let x = real.target[k];
+    let o = real.observer[k].pos;
+    let target_trail: Vec<[f32; 2]> = real.target[..=k].iter().map(|x| f([x[0], x[1]])).collect();
+    let observer_trail: Vec<[f32; 2]> = real.observer[..=k].iter().map(|o| f(o.pos)).collect();
+    rec.log(
+        "homotopy/scene/target",
+        &Points2D::new([f([x[0], x[1]])])
+            .with_colors([RED])
+            .with_radii([Radius::new_ui_points(5.0)])
+            .with_labels(["target"]),
+    )?;
+    rec.log(
+        "homotopy/scene/target_trail",
+        &LineStrips2D::new([target_trail]).with_colors([RED]),
+    )?;
+    rec.log(
+        "homotopy/scene/observer",
+        &Points2D::new([f(o)])
+            .with_colors([OBSERVER])
+            .with_radii([Radius::new_ui_points(5.0)])
+            .with_labels(["observer"]),
+    )?;
+    rec.log(
+        "homotopy/scene/observer_trail",
+        &LineStrips2D::new([observer_trail]).with_colors([OBSERVER]),
+    )?;
+    let b = real.bearings[k];
+    rec.log(
+        "homotopy/scene/bearing",
+        &LineStrips2D::new([[f(o), f([o[0] + RAY * b.cos(), o[1] + RAY * b.sin()])]])
+            .with_colors([GREY]),
+    )?;
+    for ((name, est), color) in estimates.iter().zip(FILTERS) {
         rec.log(
-            "homotopy/scene/target",
-            &Points2D::new([f([x[0], x[1]])])
-                .with_colors([RED])
-                .with_radii([Radius::new_ui_points(5.0)])
-                .with_labels(["target"]),
+            format!("homotopy/scene/estimate/{name}"),
+            &Points2D::new([f(est[k])])
+                .with_colors([color])
+                .with_radii([Radius::new_ui_points(4.0)])
+                .with_labels([*name]),
         )?;
-        rec.log(
-            "homotopy/scene/target_trail",
-            &LineStrips2D::new([target_trail]).with_colors([RED]),
-        )?;
-        rec.log(
-            "homotopy/scene/observer",
-            &Points2D::new([f(o)])
-                .with_colors([OBSERVER])
-                .with_radii([Radius::new_ui_points(5.0)])
-                .with_labels(["observer"]),
-        )?;
-        rec.log(
-            "homotopy/scene/observer_trail",
-            &LineStrips2D::new([observer_trail]).with_colors([OBSERVER]),
-        )?;
-        let b = real.bearings[k];
-        rec.log(
-            "homotopy/scene/bearing",
-            &LineStrips2D::new([[f(o), f([o[0] + RAY * b.cos(), o[1] + RAY * b.sin()])]])
-                .with_colors([GREY]),
-        )?;
-        for ((name, est), color) in estimates.iter().zip(FILTERS) {
-            rec.log(
-                format!("homotopy/scene/estimate/{name}"),
-                &Points2D::new([f(est[k])])
-                    .with_colors([color])
-                    .with_radii([Radius::new_ui_points(4.0)])
-                    .with_labels([*name]),
-            )?;
-        }
     }
     Ok(())
 }
