@@ -131,6 +131,8 @@ fn lineage_strips(lineages: &[Vec<usize>], at: &dyn Fn(usize, usize) -> [f32; 2]
 }
 
 fn log_sem(rec: &RecordingStream, sem: &SemResult) -> rerun::RecordingStreamResult<()> {
+    // On `iteration` alone: the genealogy left the `step` timeline at its last step.
+    rec.reset_time();
     for (p, _, _) in PARAMS {
         for c in 0..sem.sem.len() {
             rec.log_static(
