@@ -4,7 +4,8 @@
 //!   PF-estimated `Q_o`, `ρ_o`, as scalar series;
 //! - `dredge/cloud/…`: the particle cloud of `(Q_o, ρ_o)` after each update (every second
 //!   sample), with the estimate and the simulated value. The plane's x is `Q_o × 100` and
-//!   its y is `−ρ_o` (Rerun's y points down), both labelled by tick points.
+//!   its y is `−ρ_o` (Rerun's y points down), both labelled by tick points. One view shows
+//!   the whole plane, a second the cloud close up.
 
 use std::path::Path;
 
@@ -173,7 +174,8 @@ fn ticks() -> (Vec<f64>, Vec<f64>) {
 }
 
 /// Signals on the left (volume, mass, flows, densities), each over the whole cycle; the
-/// cloud on the right, on a fixed frame around the axis ticks, so that its motion shows.
+/// cloud on the right, on a fixed frame around the axis ticks, so that its motion shows,
+/// and below it close up.
 fn blueprint() -> Node {
     let signal = |name: &str, entity: &str| {
         // The lower right is empty in all four: the curves start low and end high or flat.
@@ -192,12 +194,24 @@ fn blueprint() -> Node {
             signal("flow-rates Q_i, Q_o (m³/s)", "Q"),
             signal("densities ρ_i, ρ_o (kg/m³)", "rho"),
         ]),
-        View::spatial_2d(
-            "particle cloud: x = Q_o × 100 (m³/s), y = −ρ_o (kg/m³)",
-            format!("{ROOT}/cloud"),
-        )
-        .with_bounds(Bounds::around(frame, 0.08))
-        .into(),
+        layout::vertical([
+            View::spatial_2d(
+                "particle cloud: x = Q_o × 100 (m³/s), y = −ρ_o (kg/m³)",
+                format!("{ROOT}/cloud"),
+            )
+            .with_bounds(Bounds::around(frame, 0.08))
+            .into(),
+            // The same cloud without the axes, which the viewer then frames on the cloud: in
+            // the whole plane it spans a few pixels.
+            View::spatial_2d(
+                "the cloud close up, framed on it (same x = Q_o × 100, y = −ρ_o)",
+                format!("{ROOT}/cloud"),
+            )
+            .with_contents(
+                ["particles", "estimate", "simulated"].map(|e| format!("+ {ROOT}/cloud/{e}")),
+            )
+            .into(),
+        ]),
     ])
     .with_shares([1.0, 1.0])
 }
