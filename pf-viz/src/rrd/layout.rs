@@ -200,23 +200,23 @@ impl Node {
 struct Ids(u128);
 
 impl Ids {
-    /// The next id's blueprint path: `view/<uuid>` or `container/<uuid>`.
-    fn next(&mut self, kind: &str) -> String {
-        // "pf" in the top bytes, so the ids read as this tool's.
+    /// The next id, with "pf" in its top bytes so that it reads as this tool's.
+    fn next(&mut self) -> Uuid {
         self.0 += 1;
-        format!("{kind}/{}", Uuid::from_u128((0x7066 << 112) | self.0))
+        Uuid::from_u128((0x7066 << 112) | self.0)
     }
 }
 
-/// Log `node` (children first) into the blueprint stream `bp`; returns its path.
+/// Log `node` (children first) into the blueprint stream `bp`; returns its path and id.
 fn log_node(
     bp: &RecordingStream,
     ids: &mut Ids,
     node: &Node,
-) -> rerun::RecordingStreamResult<String> {
+) -> rerun::RecordingStreamResult<(String, Uuid)> {
+    let id = ids.next();
     match node {
         Node::View(v) => {
-            let path = ids.next("view");
+            let path = format!("view/{id}");
             bp.log(
                 format!("{path}/ViewContents"),
                 &bp::ViewContents::new(
@@ -252,7 +252,7 @@ fn log_node(
                     &bp::PlotLegend::new().with_corner(corner),
                 )?;
             }
-            Ok(path)
+            Ok((path, id))
         }
         Node::Split {
             kind,
@@ -262,9 +262,9 @@ fn log_node(
         } => {
             let paths = children
                 .iter()
-                .map(|c| log_node(bp, ids, c))
+                .map(|c| log_node(bp, ids, c).map(|(path, _)| path))
                 .collect::<rerun::RecordingStreamResult<Vec<_>>>()?;
-            let path = ids.next("container");
+            let path = format!("container/{id}");
             let mut c = bp::ContainerBlueprint::new(*kind)
                 .with_contents(paths.iter().map(|p| bc::IncludedContent(p.as_str().into())));
             if let Some(s) = shares {
@@ -278,7 +278,7 @@ fn log_node(
                 c = c.with_grid_columns(bc::GridColumns::from(*n));
             }
             bp.log(path.as_str(), &c)?;
-            Ok(path)
+            Ok((path, id))
         }
     }
 }
@@ -302,11 +302,7 @@ pub fn send(
         Node::View(_) => tabs([root.clone()]),
         split => split.clone(),
     };
-    let root_path = log_node(&bp, &mut ids, &root)?;
-    let root_id = root_path
-        .strip_prefix("container/")
-        .and_then(|id| Uuid::parse_str(id).ok())
-        .unwrap_or_default();
+    let (_, root_id) = log_node(&bp, &mut ids, &root)?;
     bp.log(
         "viewport",
         &bp::ViewportBlueprint::new().with_root_container(bc::RootContainer(root_id.into())),
@@ -351,14 +347,11 @@ mod tests {
     }
 
     #[test]
-    fn ids_are_distinct_uuids_in_order() {
+    fn ids_are_distinct_and_numbered_in_order() {
         let mut ids = Ids(0);
-        let (a, b) = (ids.next("view"), ids.next("container"));
+        let (a, b) = (ids.next(), ids.next());
         assert_ne!(a, b);
-        for p in [&a, &b] {
-            let id = p.split_once('/').unwrap().1;
-            assert!(Uuid::parse_str(id).is_ok(), "{p}");
-        }
-        assert!(a.ends_with("0001") && b.ends_with("0002"), "{a} {b}");
+        assert_eq!(a.to_string(), "70660000-0000-0000-0000-000000000001");
+        assert_eq!(b.as_u128() - a.as_u128(), 1);
     }
 }
