@@ -58,8 +58,8 @@ pub struct LinePlot {
     pub series: Vec<Series>,
     /// Horizontal reference lines.
     pub ref_lines: Vec<RefLine>,
-    /// Fixed y range; `None` fits the data, bands and reference lines (plus headroom for
-    /// the legend when it sits at the top).
+    /// Fixed y range; `None` fits the data, bands and reference lines, with room for the
+    /// legend where a point would lie behind it.
     pub y_range: Option<(f64, f64)>,
     /// Where the legend sits; keep it clear of the data with `y_range` or the headroom.
     pub legend: LegendPos,
@@ -133,6 +133,63 @@ impl LinePlot {
         );
         (x, y)
     }
+
+    /// The y range `y` (the padded data) widened at the legend's edge until no point or
+    /// band under the legend's box lies behind it. The box is estimated from the font size
+    /// and the longest entry, as a share of a [`style::SIZE`] figure's plot area.
+    fn fitted_y(&self, x: (f64, f64), y: (f64, f64)) -> (f64, f64) {
+        let banded = " (shaded: band)".len();
+        let chars = self
+            .series
+            .iter()
+            .map(|s| s.name.chars().count() + if s.band.is_some() { banded } else { 0 })
+            .chain(self.ref_lines.iter().map(|r| r.label.chars().count()))
+            .max()
+            .unwrap_or(0);
+        let entries = self.series.len() + self.ref_lines.len();
+        let (plot_w, plot_h) = (
+            f64::from(style::SIZE.0 - 2 * style::MARGIN_PX - style::Y_LABEL_AREA_PX),
+            f64::from(
+                style::SIZE.1 - 2 * style::MARGIN_PX - style::X_LABEL_AREA_PX - 2 * style::TITLE_PX,
+            ),
+        );
+        // Rows of about 1.2 font heights, the box's padding, and its 12 px margin.
+        let legend_px = f64::from(style::LEGEND_PX);
+        let h = ((entries as f64 * 1.2 * legend_px + 2.0 * legend_px + 12.0) / plot_h).min(0.8);
+        let w = (f64::from(style::KEY_PX) + 40.0 + chars as f64 * 0.6 * legend_px) / plot_w;
+        let (top, left) = match self.legend {
+            LegendPos::UpperLeft => (true, true),
+            LegendPos::UpperRight => (true, false),
+            LegendPos::LowerLeft => (false, true),
+            LegendPos::LowerRight => (false, false),
+        };
+        let span = x.1 - x.0;
+        let (xa, xb) = if left {
+            (x.0, x.0 + w * span)
+        } else {
+            (x.1 - w * span, x.1)
+        };
+        let under = self.series.iter().flat_map(|s| {
+            let band = s.band.iter().flat_map(|b| {
+                s.x.iter()
+                    .zip(b.lower.iter().zip(&b.upper))
+                    .flat_map(|(&x, (&l, &u))| [(x, l), (x, u)])
+            });
+            s.x.iter().copied().zip(s.y.iter().copied()).chain(band)
+        });
+        let ys = under.filter(|&(x, _)| x >= xa && x <= xb).map(|(_, y)| y);
+        let (lo, hi) = y;
+        if top {
+            let m = ys.fold(f64::NEG_INFINITY, f64::max);
+            // (m − lo) / (hi' − lo) ≤ 1 − h: the highest point stays below the box.
+            let need = lo + (m - lo) / (1.0 - h);
+            (lo, if need.is_finite() { hi.max(need) } else { hi })
+        } else {
+            let m = ys.fold(f64::INFINITY, f64::min);
+            let need = hi - (hi - m) / (1.0 - h);
+            (if need.is_finite() { lo.min(need) } else { lo }, hi)
+        }
+    }
 }
 
 /// Draw `plot` to the PNG file `path`.
@@ -150,7 +207,7 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
     let (x_lo, x_hi) = style::padded(x_lo, x_hi, 0.01);
     let (y_lo, y_hi) = plot
         .y_range
-        .unwrap_or_else(|| style::padded(y_lo, y_hi, 0.06));
+        .unwrap_or_else(|| plot.fitted_y((x_lo, x_hi), style::padded(y_lo, y_hi, 0.06)));
     let mut chart = ChartBuilder::on(root)
         .caption(&plot.title, style::title())
         .margin(style::MARGIN_PX)
@@ -261,6 +318,56 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn ramp(legend: LegendPos, rising: bool) -> LinePlot {
+        let x: Vec<f64> = (0..=10).map(f64::from).collect();
+        let y = x
+            .iter()
+            .map(|&v| if rising { v } else { 10.0 - v })
+            .collect();
+        LinePlot {
+            title: "t".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            series: vec![Series {
+                name: "a series".into(),
+                x,
+                y,
+                band: None,
+            }],
+            ref_lines: vec![],
+            y_range: None,
+            legend,
+        }
+    }
+
+    /// A legend in the corner the data run into gets room; one over empty space does not.
+    #[test]
+    fn the_legend_gets_room_only_where_data_would_lie_behind_it() {
+        let padded = style::padded(0.0, 10.0, 0.06);
+        for (legend, rising, grows) in [
+            (LegendPos::UpperRight, true, true),
+            (LegendPos::UpperLeft, false, true),
+            (LegendPos::LowerRight, false, true),
+            (LegendPos::LowerLeft, true, true),
+            (LegendPos::UpperRight, false, false),
+            (LegendPos::LowerLeft, false, false),
+        ] {
+            let p = ramp(legend, rising);
+            let (lo, hi) = p.fitted_y((0.0, 10.0), padded);
+            let wider = (lo, hi) != padded;
+            assert_eq!(wider, grows, "{legend:?}, rising {rising}: {lo}..{hi}");
+            if grows {
+                // The extreme point now sits at least a legend's height from the edge.
+                let frac = if matches!(legend, LegendPos::UpperLeft | LegendPos::UpperRight) {
+                    (hi - 10.0) / (hi - lo)
+                } else {
+                    (0.0 - lo) / (hi - lo)
+                };
+                assert!(frac > 0.1, "{legend:?}: {frac}");
+            }
+        }
+    }
 
     #[test]
     fn bad_lengths_are_rejected() {
