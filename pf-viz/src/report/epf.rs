@@ -332,9 +332,10 @@ fn run_scenario(
         file: frames_file,
         caption: format!(
             "{}: frames {} of one simulated run (cf. the paper's Fig. {}). Dots: detections \
-             of the frame (unlabelled); grey: true paths; solid: EPF tracks with their \
-             validation gates (P_G = {}) and association lines; dashed with crosses: NNSF \
-             tracks.",
+             of the frame (unlabelled); thin grey: true paths, labelled by target at the \
+             frame; solid blue: EPF tracks, with a short segment to the detection each was \
+             associated with; dashed grey: EPF validation gates (P_G = {}); short red \
+             dashes: NNSF tracks.",
             title(s),
             panel_frames(s)
                 .iter()
@@ -485,13 +486,15 @@ fn frames_figure(
             }
             if mi == 0 {
                 let rec = &res.records[ri];
+                // Gates dashed grey, so that their key differs from the tracks'; the
+                // association segments share the tracks' style and are named in the caption.
                 layers.push(Layer {
                     name: "EPF gates".into(),
-                    style,
+                    style: XyStyle::Series(1),
                     kind: LayerKind::Ellipses(rec.targets.iter().map(|t| t.gate).collect()),
                 });
                 layers.push(Layer {
-                    name: "EPF associations".into(),
+                    name: String::new(),
                     style,
                     kind: LayerKind::Segments(
                         rec.targets
