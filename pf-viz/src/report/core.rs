@@ -106,8 +106,9 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
                 file: "genealogy.png".into(),
                 caption: format!(
                     "Genealogy of a bootstrap filter with N = {n} particles on the noisy AR(1) \
-                     model (cf. Cappé & Moulines, Fig. 1): grey paths died out, black paths \
-                     are ancestors of the final particles; the line marks their coalescence."
+                     model (cf. Cappé & Moulines, Fig. 1): grey, every particle's path from \
+                     its parent; blue, the lineages of the final particles; dashed black, the \
+                     true state; the red line marks the lineages' coalescence."
                 ),
             },
             Figure {

@@ -89,7 +89,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
                 "Fig. {fig}: N(k)/N_PF, the particles the MPF with k linear states in the KF \
                  affords at the cost of the standard PF with N_PF = 2000, for m = 3…9 states \
                  of which n = 2 are nonlinear ({}), with the paper's c1 = 445, c2 = 487, \
-                 c3 = 125. Curves for k = 1…4; k = 5…7 (one or two points each) are in \
+                 c3 = 125. Curves for k = 1…4; k = 5…7 (three, two and one points) are in \
                  summary.json.",
                 if nonzero {
                     "C_t ≠ 0, eq. (12): a Riccati recursion per particle"
