@@ -10,9 +10,10 @@
 
 use pf_core::gaussian::ErrorEllipse;
 use pf_homotopy::experiments::{
-    AblationConfig, AblationResult, EllipsesConfig, EllipsesResult, GeometryConfig, GeometryResult,
-    InformationConfig, InformationResult, PerAlgorithm, RmseConfig, RmseResult, ScenarioGeometry,
-    ablation, ellipses, geometry as geometry_sweep, information, rmse, scenario_geometry,
+    AblationConfig, AblationResult, Ellipse, EllipsesConfig, EllipsesResult, GeometryConfig,
+    GeometryResult, InformationConfig, InformationResult, PerAlgorithm, RmseConfig, RmseResult,
+    ScenarioGeometry, ablation, ellipses, geometry as geometry_sweep, information, rmse,
+    scenario_geometry,
 };
 use serde::Serialize;
 
@@ -134,7 +135,18 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         ),
     });
     let whole = ellipse_plot(&ell, &geometry);
-    let zoom = zoom_plot(&whole, ell.truth, ZOOM_HALF_WIDTH);
+    let motion = EllipseMotion::of(&ell);
+    // Wide enough for the centres' path and the true position.
+    let reach = (motion.midpoint[0] - ell.truth[0])
+        .abs()
+        .max((motion.midpoint[1] - ell.truth[1]).abs());
+    let zoom = zoom_plot(
+        &whole,
+        motion.midpoint,
+        ZOOM_HALF_WIDTH
+            .max(0.75 * motion.centre_shift)
+            .max(1.1 * reach),
+    );
     png::xy::render_grid(
         &ctx.path("homotopy-fig2-ellipses.png"),
         "Fig. 2: OHF error ellipses over λ at sample 17",
@@ -143,14 +155,24 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     )?;
     figures.push(Figure {
         file: "homotopy-fig2-ellipses.png".into(),
-        caption: "Fig. 2: 95 % error ellipses of the OHF's Gaussian parameterisation of the \
-                  position at sample 17 for λ = 0 (the prediction), ¼, ½, ¾ and 1 (the \
-                  posterior approximation), with the true position; left, the whole prediction \
-                  and the observer; right, a square around the true position. The homotopy \
-                  pulls the prediction onto the line of sight as λ grows. Realisation 0 of the \
-                  seed, not a chosen one: how far the ellipse moves varies between \
-                  realisations (the information figure shows the mean)."
-            .into(),
+        caption: format!(
+            "Fig. 2: 95 % error ellipses of the OHF's Gaussian parameterisation of the \
+             position at sample 17 for λ = 0 (the prediction), ¼, ½, ¾ and 1 (the posterior \
+             approximation), with their centres and the true position; left, the whole \
+             prediction and the observer; right, a square around the centres' path and the true position. As λ goes \
+             from 0 to 1 the centre moves {:.0} m and the 95 % semi-axes shrink from {:.0} × \
+             {:.0} m to {:.0} × {:.0} m; the true position lies {:.0} m from the prediction's \
+             centre and {:.0} m from the posterior's. Realisation 0 of the seed, not a chosen \
+             one: how far the ellipse moves varies between realisations (the information \
+             figure shows the mean).",
+            motion.centre_shift,
+            motion.first.semi_axes[0],
+            motion.first.semi_axes[1],
+            motion.last.semi_axes[0],
+            motion.last.semi_axes[1],
+            dist(motion.first.center, ell.truth),
+            dist(motion.last.center, ell.truth),
+        ),
     });
     let last = r.time.len() - 1;
     let series = [
@@ -566,7 +588,7 @@ fn scenario_plot(g: &ScenarioGeometry) -> XyPlot {
     }
 }
 
-/// Half-width (m) of Fig. 2's zoomed panel around the true position: a few cross-range
+/// Least half-width (m) of Fig. 2's zoomed panel around the centres' path: a few cross-range
 /// widths of the ellipses (≈ 100 m at 5 km for σ = ½°), so that their change with λ shows.
 const ZOOM_HALF_WIDTH: f64 = 600.0;
 
@@ -594,7 +616,7 @@ fn zoom_plot(plot: &XyPlot, centre: [f64; 2], half: f64) -> XyPlot {
         _ => l.clone(),
     };
     XyPlot {
-        title: format!("around the true position (±{half:.0} m)"),
+        title: format!("around the centres (±{half:.0} m)"),
         layers: plot
             .layers
             .iter()
@@ -606,6 +628,40 @@ fn zoom_plot(plot: &XyPlot, centre: [f64; 2], half: f64) -> XyPlot {
         y_range: Some((centre[1] - half, centre[1] + half)),
         ..plot.clone()
     }
+}
+
+/// How Fig. 2's ellipse changes from λ = 0 to λ = 1.
+struct EllipseMotion {
+    first: Ellipse,
+    last: Ellipse,
+    /// Distance between the first and the last centre (m).
+    centre_shift: f64,
+    /// Halfway between them.
+    midpoint: [f64; 2],
+}
+
+impl EllipseMotion {
+    fn of(r: &EllipsesResult) -> Self {
+        let first = r.ellipses.first().copied().unwrap_or(Ellipse {
+            center: r.truth,
+            semi_axes: [0.0; 2],
+            angle: 0.0,
+        });
+        let last = r.ellipses.last().copied().unwrap_or(first);
+        EllipseMotion {
+            first,
+            last,
+            centre_shift: dist(first.center, last.center),
+            midpoint: [
+                0.5 * (first.center[0] + last.center[0]),
+                0.5 * (first.center[1] + last.center[1]),
+            ],
+        }
+    }
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
 }
 
 fn ellipse_plot(r: &EllipsesResult, g: &ScenarioGeometry) -> XyPlot {
@@ -624,6 +680,20 @@ fn ellipse_plot(r: &EllipsesResult, g: &ScenarioGeometry) -> XyPlot {
             kind: LayerKind::Ellipses(vec![to_ellipse(e)]),
         })
         .collect();
+    let centres: Vec<[f64; 2]> = r.ellipses.iter().map(|e| e.center).collect();
+    if let (Some(&first), Some(&last)) = (centres.first(), centres.last()) {
+        // Blue dots, so that their key differs from the observer's black one.
+        layers.push(Layer {
+            name: "centres".into(),
+            style: XyStyle::Series(0),
+            kind: LayerKind::Points(centres),
+        });
+        layers.push(Layer {
+            name: String::new(),
+            style: XyStyle::Series(2),
+            kind: LayerKind::Labels(vec![(first, " λ = 0".into()), (last, " λ = 1".into())]),
+        });
+    }
     layers.push(Layer {
         name: "true position".into(),
         style: XyStyle::Series(3),
