@@ -345,17 +345,28 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
                 stride(t7.len()),
             ),
         ],
-        LegendPos::UpperLeft,
+        // The lower right is empty: Q_o and ρ_o both run high there.
+        LegendPos::LowerRight,
     );
     p7.y_range = Some((-50.0, rho_top));
     line::render(&ctx.path("dredge-fig7-direct.png"), &p7)?;
     fig(
         "dredge-fig7-direct.png",
-        "Fig. 7. Paper: on real data, PF estimates (thick) against the direct computation \
-         (15)–(16) on zero-phase low-passed (0.001 Hz) V_t, m_t (thin). Ours: the same on the \
-         simulated cycle (we have no ship data); ρ̄_o is left out where Q̄_o < 0.5 m³/s, and the axis is clipped at 1.3 × the PF's largest ρ_o: in phase 1 ρ̄_o divides by a Q̄_o that is only start-up noise and reaches thousands. The \
-         direct computation is anti-causal, so it cannot run on line."
-            .into(),
+        format!(
+            "Fig. 7. Paper: on real data, PF estimates (thick) against the direct computation \
+             (15)–(16) on zero-phase low-passed (0.001 Hz) V_t, m_t (thin). Ours: the same on \
+             the simulated cycle (we have no ship data); ρ̄_o is left out where Q̄_o < 0.5 \
+             m³/s, and the axis is clipped at 1.3 × the PF's largest ρ_o: in phase 1 ρ̄_o \
+             divides by a Q̄_o that is only start-up noise and reaches thousands.{} The \
+             direct computation is anti-causal, so it cannot run on line.",
+            match f7.q_o_direct.iter().flatten().next() {
+                Some(q) => format!(
+                    " The direct Q̄_o starts at {q:.1} m³/s where no overflow runs yet: the \
+                     zero-phase filter's transient at the record's edge."
+                ),
+                None => String::new(),
+            }
+        ),
     );
 
     // Fig. 8: 25-run band.
