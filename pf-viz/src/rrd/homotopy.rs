@@ -146,31 +146,31 @@ fn log_sample(
     k: usize,
 ) -> rerun::RecordingStreamResult<()> {
     let f = north_up;
-    let x = real.target[k];
     let o = real.observer[k].pos;
-    let target_trail: Vec<[f32; 2]> = real.target[..=k].iter().map(|x| f([x[0], x[1]])).collect();
-    let observer_trail: Vec<[f32; 2]> = real.observer[..=k].iter().map(|o| f(o.pos)).collect();
-    rec.log(
-        "homotopy/scene/target",
-        &Points2D::new([f([x[0], x[1]])])
-            .with_colors([RED])
-            .with_radii([Radius::new_ui_points(5.0)])
-            .with_labels(["target"]),
+    // A moving body: its position, labelled, and its trail so far.
+    let body = |name: &str, trail: Vec<[f32; 2]>, color| -> rerun::RecordingStreamResult<()> {
+        let at = trail.last().copied().unwrap_or_default();
+        rec.log(
+            format!("homotopy/scene/{name}"),
+            &Points2D::new([at])
+                .with_colors([color])
+                .with_radii([Radius::new_ui_points(5.0)])
+                .with_labels([name]),
+        )?;
+        rec.log(
+            format!("homotopy/scene/{name}_trail"),
+            &LineStrips2D::new([trail]).with_colors([color]),
+        )
+    };
+    body(
+        "target",
+        real.target[..=k].iter().map(|x| f([x[0], x[1]])).collect(),
+        RED,
     )?;
-    rec.log(
-        "homotopy/scene/target_trail",
-        &LineStrips2D::new([target_trail]).with_colors([RED]),
-    )?;
-    rec.log(
-        "homotopy/scene/observer",
-        &Points2D::new([f(o)])
-            .with_colors([OBSERVER])
-            .with_radii([Radius::new_ui_points(5.0)])
-            .with_labels(["observer"]),
-    )?;
-    rec.log(
-        "homotopy/scene/observer_trail",
-        &LineStrips2D::new([observer_trail]).with_colors([OBSERVER]),
+    body(
+        "observer",
+        real.observer[..=k].iter().map(|o| f(o.pos)).collect(),
+        OBSERVER,
     )?;
     let b = real.bearings[k];
     rec.log(
