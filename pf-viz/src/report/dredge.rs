@@ -208,7 +208,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         .copied()
         .fold(f64::NEG_INFINITY, f64::max);
     let mut s4 = vec![
-        series("m_t (t)", &c.t, m_kt.iter().copied()),
+        series("m_t (tonnes)", &c.t, m_kt.iter().copied()),
         series("V_t (m³)", &c.t, c.v_t.iter().copied()),
         thin(
             series("h_o × 1000 (m)", &c.t, c.h_o.iter().map(|h| h * 1000.0)),
@@ -229,7 +229,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         &ctx.path("dredge-fig4-phases.png"),
         &plot(
             "Fig. 4: loading phases",
-            "m_t (t); V_t (m³); h_o × 1000 (m)",
+            "m_t (tonnes); V_t (m³); h_o × 1000 (m)",
             s4,
             LegendPos::LowerRight,
         ),
