@@ -14,6 +14,10 @@ use crate::error::{Result, VizError};
 /// Series with more points than this are drawn without markers.
 const MAX_MARKED_POINTS: usize = 60;
 
+/// Series with this many points or fewer are a handful of measured settings joined by lines:
+/// each point gets a marker, squares for the series whose style has none.
+const FEW_POINTS: usize = 12;
+
 /// A shaded band `lower[j] ≤ y ≤ upper[j]` at the series' x values.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Band {
@@ -265,7 +269,11 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
         };
         // Markers on a dense series would merge into a thick line: beyond this many
         // points the dash pattern alone tells the series apart.
-        let marker = if dense { Marker::None } else { look.marker };
+        let marker = match look.marker {
+            _ if dense => Marker::None,
+            Marker::None if points.len() <= FEW_POINTS => Marker::Square,
+            m => m,
+        };
         let drawn = style::SeriesStyle {
             dash,
             marker,
@@ -291,6 +299,15 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
                             .iter()
                             .map(|&c| Cross::new(c, style::CROSS_PX, stroke)),
                     )
+                    .map_err(&err)?;
+            }
+            Marker::Square => {
+                let r = style::CIRCLE_PX;
+                chart
+                    .draw_series(points.iter().map(|&c| {
+                        EmptyElement::at(c)
+                            + Rectangle::new([(-r, -r), (r, r)], look.color.filled())
+                    }))
                     .map_err(&err)?;
             }
         }

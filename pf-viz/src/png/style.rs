@@ -7,7 +7,7 @@
 
 use std::sync::OnceLock;
 
-use plotters::element::{Circle, Cross, DashedPathElement, Drawable, PointCollection};
+use plotters::element::{Circle, Cross, DashedPathElement, Drawable, PointCollection, Rectangle};
 use plotters::style::{
     Color, FontFamily, FontStyle, IntoFont, RGBColor, ShapeStyle, TextStyle, register_font,
 };
@@ -108,6 +108,9 @@ pub enum Marker {
     Circle,
     /// An upright cross.
     Cross,
+    /// A filled square: what a series without a marker of its own shows at each of a few
+    /// measured points (see `png::line`).
+    Square,
 }
 
 /// The complete look of one line series.
@@ -210,6 +213,16 @@ impl<DB: DrawingBackend> Drawable<DB> for Key {
                 Circle::new((0, 0), CIRCLE_PX, self.look.color.filled()).draw(mid, backend, dim)
             }
             Marker::Cross => Cross::new((0, 0), CROSS_PX, stroke).draw(mid, backend, dim),
+            Marker::Square => {
+                // A rectangle draws from its two corners, in pixels here.
+                let (cx, r) = (x + KEY_PX / 2, CIRCLE_PX);
+                let corners = [(cx - r, y - r), (cx + r, y + r)];
+                Rectangle::new(corners, self.look.color.filled()).draw(
+                    corners.into_iter(),
+                    backend,
+                    dim,
+                )
+            }
         }
     }
 }
@@ -393,6 +406,22 @@ mod tests {
         let arm = (5 + KEY_PX as u32 / 2 - 3, 10 - 3);
         assert!(crossed(arm.0, arm.1));
         assert!(!solid(arm.0, arm.1) && !dashed(arm.0, arm.1));
+        // A square's corner is inked off the line, where a circle's is not.
+        let squared = key_ink(SeriesStyle {
+            marker: Marker::Square,
+            ..SERIES[0]
+        });
+        let circled = key_ink(SeriesStyle {
+            marker: Marker::Circle,
+            ..SERIES[0]
+        });
+        // One pixel inside the square's corner: √18 px from the centre, beyond the circle.
+        let corner = (
+            5 + KEY_PX as u32 / 2 + CIRCLE_PX as u32 - 1,
+            10 - CIRCLE_PX as u32 + 1,
+        );
+        assert!(squared(corner.0, corner.1) && !circled(corner.0, corner.1));
+        assert!(!solid(corner.0, corner.1));
     }
 
     #[test]
