@@ -145,7 +145,7 @@ impl Default for SemExperiment {
 }
 
 impl SemExperiment {
-    /// Check σ, ρ > 0, φ finite, N, C ≥ 1.
+    /// Check σ, ρ > 0, φ finite, N, C ≥ 1, and C no more than a machine can hold.
     ///
     /// # Errors
     /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
@@ -153,6 +153,8 @@ impl SemExperiment {
         let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
         at_least_one("particles", self.particles)?;
         at_least_one("chains", self.chains)?;
+        // Named here: the replication runner would call them "replications".
+        pf_core::limits::check_count("the number of SEM chains", self.chains)?;
         Ok(theta)
     }
 }
@@ -359,4 +361,25 @@ pub fn lag_sweep(y: &[f64], cfg: &LagSweep) -> Result<LagSweepResult> {
         fixed_lag,
         joint: ThetaSamples::from_thetas(&joint),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Too many chains are refused by name, before any chain runs.
+    #[test]
+    fn too_many_sem_chains_are_named_as_chains() {
+        let cfg = SemExperiment {
+            phi: 0.9,
+            sigma: 0.5,
+            rho: 1.0,
+            particles: 10,
+            iterations: 1,
+            chains: usize::MAX,
+            seed: 1,
+        };
+        let e = sem(&[0.1, 0.2, 0.3], &cfg).unwrap_err().to_string();
+        assert!(e.contains("SEM chains"), "{e}");
+    }
 }
