@@ -209,8 +209,14 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         caption: format!(
             "Fig. 3: RMS position error against time over {} realisations for UKF-LPC, the \
              PF with the linearised optimal importance density (N = {}), OHF and AOHF. The \
-             target becomes observable after the observer's turn (samples 13–17).",
-            rmse_cfg.realisations, rmse_cfg.filters.particles
+             target becomes observable after the observer's turn (samples {}–{}, counted \
+             from 1, so t = {}–{} s on this axis).",
+            rmse_cfg.realisations,
+            rmse_cfg.filters.particles,
+            rmse_cfg.scenario.turn_start,
+            rmse_cfg.scenario.turn_end,
+            rmse_cfg.scenario.turn_start.saturating_sub(1) as f64 * rmse_cfg.scenario.t,
+            rmse_cfg.scenario.turn_end.saturating_sub(1) as f64 * rmse_cfg.scenario.t,
         ),
     });
     png::line::render(
