@@ -81,21 +81,38 @@ pub struct AblationResult {
     pub ohf_by_grid: Vec<Option<f64>>,
     /// AOHF final RMS error per grid.
     pub aohf_by_grid: Vec<Option<f64>>,
+    /// The largest single realisation's final error, `[OHF, AOHF]` per λ step count: an
+    /// RMS over a few dozen realisations is set by its worst ones.
+    pub worst_by_steps: Vec<[Option<f64>; 2]>,
+    /// The same per grid.
+    pub worst_by_grid: Vec<[Option<f64>; 2]>,
     /// The settings that failed, with the first error of each.
     pub failures: Vec<String>,
 }
 
-/// Final RMS errors of OHF and AOHF under `cfg`, each `None` (and the error recorded in
-/// `failures`) when that filter fails on some realisation.
-fn final_rmse(cfg: &RmseConfig, setting: &str, failures: &mut Vec<String>) -> [Option<f64>; 2] {
+/// One setting's final errors for OHF and AOHF: RMS and the worst realisation's, each
+/// `None` when that filter failed.
+type Finals = [Option<(f64, f64)>; 2];
+
+/// Final RMS and worst errors of OHF and AOHF under `cfg`, each `None` (and the error
+/// recorded in `failures`) when that filter fails on some realisation.
+fn final_rmse(cfg: &RmseConfig, setting: &str, failures: &mut Vec<String>) -> Finals {
     let mut out = [None; 2];
     for (o, alg) in out.iter_mut().zip([Algorithm::Ohf, Algorithm::Aohf]) {
         match final_squared_errors(cfg, &[alg]) {
-            Ok(sq) => *o = Some(mean_and_se(&sq[0]).0.sqrt()),
+            Ok(sq) => {
+                let worst = sq[0].iter().copied().fold(0.0, f64::max).sqrt();
+                *o = Some((mean_and_se(&sq[0]).0.sqrt(), worst));
+            }
             Err(e) => failures.push(format!("{} with {setting}: {e}", alg.name())),
         }
     }
     out
+}
+
+/// Split a setting's [`Finals`] into its RMS errors and its worst errors.
+fn split(f: Finals) -> ([Option<f64>; 2], [Option<f64>; 2]) {
+    (f.map(|x| x.map(|(r, _)| r)), f.map(|x| x.map(|(_, w)| w)))
 }
 
 /// Run both sweeps.
@@ -118,15 +135,18 @@ pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
         grids: cfg.grids.clone(),
         ohf_by_grid: Vec::new(),
         aohf_by_grid: Vec::new(),
+        worst_by_steps: Vec::new(),
+        worst_by_grid: Vec::new(),
         failures: Vec::new(),
     };
     for &m in &cfg.lambda_steps {
         let mut c = base.clone();
         c.filters.ohf.lambda.steps = m;
         c.filters.aohf.lambda.steps = m;
-        let [o, a] = final_rmse(&c, &format!("{m} λ steps"), &mut res.failures);
+        let ([o, a], worst) = split(final_rmse(&c, &format!("{m} λ steps"), &mut res.failures));
         res.ohf_by_steps.push(o);
         res.aohf_by_steps.push(a);
+        res.worst_by_steps.push(worst);
     }
     let mut direct = base.clone();
     direct.filters.ohf = OhfConfig::direct();
@@ -136,9 +156,47 @@ pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
         let mut c = base.clone();
         c.filters.grid.n_bearing = nb;
         c.filters.grid.n_range = nr;
-        let [o, a] = final_rmse(&c, &format!("a {nb} × {nr} grid"), &mut res.failures);
+        let ([o, a], worst) = split(final_rmse(
+            &c,
+            &format!("a {nb} × {nr} grid"),
+            &mut res.failures,
+        ));
         res.ohf_by_grid.push(o);
         res.aohf_by_grid.push(a);
+        res.worst_by_grid.push(worst);
     }
     Ok(res)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every setting reports a worst final error, and none is below its RMS (the largest of
+    /// a set is at least its root mean square).
+    #[test]
+    fn worst_errors_cover_every_setting_and_bound_the_rms() {
+        let cfg = AblationConfig {
+            realisations: 3,
+            lambda_steps: vec![20],
+            grids: vec![[12, 6]],
+            ..AblationConfig::at_scale(Scale::Quick)
+        };
+        let r = ablation(&cfg).unwrap();
+        assert_eq!(r.worst_by_steps.len(), 1);
+        assert_eq!(r.worst_by_grid.len(), 1);
+        let pairs = [
+            (r.ohf_by_steps[0], r.worst_by_steps[0][0]),
+            (r.aohf_by_steps[0], r.worst_by_steps[0][1]),
+            (r.ohf_by_grid[0], r.worst_by_grid[0][0]),
+            (r.aohf_by_grid[0], r.worst_by_grid[0][1]),
+        ];
+        for (rms, worst) in pairs {
+            let (rms, worst) = (rms.unwrap(), worst.unwrap());
+            assert!(
+                worst >= rms && worst.is_finite(),
+                "worst {worst} < rms {rms}"
+            );
+        }
+    }
 }
