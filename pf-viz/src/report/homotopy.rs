@@ -159,9 +159,10 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             "Fig. 2: 95 % error ellipses of the OHF's Gaussian parameterisation of the \
              position at sample 17 for λ = 0 (the prediction), ¼, ½, ¾ and 1 (the posterior \
              approximation), with their centres and the true position; left, the whole \
-             prediction and the observer; right, a square around the centres' path and the true position. As λ goes \
-             from 0 to 1 the centre moves {:.0} m and the 95 % semi-axes shrink from {:.0} × \
-             {:.0} m to {:.0} × {:.0} m; the true position lies {:.0} m from the prediction's \
+             prediction and the observer; right, a square around the centres' path and the \
+             true position. As λ goes from 0 to 1 the centre moves {:.0} m and the 95 % \
+             semi-axes shrink from {:.0} × {:.0} m to {:.0} × {:.0} m; the true position lies \
+             {:.0} m from the prediction's \
              centre and {:.0} m from the posterior's. Realisation 0 of the seed, not a chosen \
              one: how far the ellipse moves varies between realisations (the information \
              figure shows the mean).",
@@ -648,7 +649,7 @@ fn zoom_plot(plot: &XyPlot, centre: [f64; 2], half: f64) -> XyPlot {
     }
 }
 
-/// "setting: OHF / AOHF m" for each setting, a failed filter shown as "failed".
+/// "<setting> <OHF> / <AOHF> m" for each setting, a failed filter shown as "failed".
 fn worst_list(settings: impl Iterator<Item = String>, worst: &[[Option<f64>; 2]]) -> String {
     let m = |w: Option<f64>| w.map_or("failed".into(), |v| format!("{v:.0}"));
     settings
