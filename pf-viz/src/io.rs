@@ -493,66 +493,6 @@ mod tests {
         assert!(s.entries().is_empty());
     }
 
-    fn is_char_device(path: &str) -> bool {
-        use std::os::unix::fs::FileTypeExt;
-        fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_char_device())
-    }
-
-    /// The character device `/dev/<name>` (major 1, `minor`) to test writes against. As
-    /// root, `mknod` makes a node of the test's own in `dir`, so that a regression would
-    /// replace that node and not the system's; for other users the system's, which they
-    /// cannot replace either. `None` when a node was made but cannot be opened (a `nodev`
-    /// mount): nothing is safe to write to then.
-    fn test_device(dir: &Path, name: &str, minor: u32) -> Option<PathBuf> {
-        let node = dir.join(name);
-        let made = std::process::Command::new("mknod")
-            .args(["-m", "666"])
-            .arg(&node)
-            .args(["c", "1", &minor.to_string()])
-            .stderr(std::process::Stdio::null())
-            .status()
-            .is_ok_and(|st| st.success());
-        if !made {
-            return Some(PathBuf::from(format!("/dev/{name}")));
-        }
-        OpenOptions::new()
-            .write(true)
-            .open(&node)
-            .is_ok()
-            .then_some(node)
-    }
-
-    /// A null and a full device are written in place: the first takes the bytes, the
-    /// second fails, and both stay devices (a rename would have replaced them, as root).
-    #[test]
-    fn devices_are_written_in_place() {
-        let s = Scratch::new("dev");
-        let (Some(null), Some(full)) = (test_device(&s.0, "null", 3), test_device(&s.0, "full", 7))
-        else {
-            eprintln!("no device node to write to safely here: skipped");
-            return;
-        };
-        let is_dev = |p: &Path| is_char_device(&p.to_string_lossy());
-        assert!(is_dev(&null) && is_dev(&full));
-        write_atomic(&null, |w| w.write_all(b"gone").map_err(VizError::io(&null))).unwrap();
-        write_atomic_path(&null, |tmp| {
-            fs::write(tmp, b"gone").map_err(VizError::io(tmp))
-        })
-        .unwrap();
-        let err = write_atomic(&full, |w| {
-            w.write_all(&[0; 1 << 16]).map_err(VizError::io(&full))
-        })
-        .unwrap_err();
-        assert!(err.to_string().contains("No space left"), "{err}");
-        let err = write_atomic_path(&full, |tmp| fs::write(tmp, b"x").map_err(VizError::io(tmp)))
-            .unwrap_err();
-        assert!(
-            matches!(&err, VizError::Io { path, .. } if *path == full),
-            "{err}"
-        );
-        assert!(is_dev(&null) && is_dev(&full), "a device was replaced");
-    }
-
     /// A FIFO is written in place too: its reader gets the bytes, and it stays a FIFO.
     #[test]
     fn a_fifo_is_written_in_place() {

@@ -181,17 +181,61 @@ fn test_device(dir: &Path, name: &str, minor: u32) -> Option<PathBuf> {
         .then_some(node)
 }
 
+/// A null and a full device node of [`test_device`]'s, with the scratch that holds them;
+/// `None` (said on stderr) where no node is safe to write to.
+fn devices(name: &str) -> Option<(Scratch, PathBuf, PathBuf)> {
+    let s = Scratch::new(name);
+    match (
+        test_device(s.dir(), "null", 3),
+        test_device(s.dir(), "full", 7),
+    ) {
+        (Some(null), Some(full)) => Some((s, null, full)),
+        _ => {
+            eprintln!("no device node to write to safely here: skipped");
+            None
+        }
+    }
+}
+
+/// The library's two writers on the same nodes: a null device takes the bytes, a full one
+/// fails with the error naming it, and both stay devices (a rename would have replaced
+/// them, as root).
+#[test]
+fn the_writers_write_devices_in_place() {
+    use pf_viz::VizError;
+    use pf_viz::io::{write_atomic, write_atomic_path};
+    let Some((_s, null, full)) = devices("dev-lib") else {
+        return;
+    };
+    let check = |p: &Path| assert_char_device(&p.to_string_lossy());
+    check(&null);
+    check(&full);
+    write_atomic(&null, |w| w.write_all(b"gone").map_err(VizError::io(&null))).unwrap();
+    write_atomic_path(&null, |tmp| {
+        fs::write(tmp, b"gone").map_err(VizError::io(tmp))
+    })
+    .unwrap();
+    let err = write_atomic(&full, |w| {
+        w.write_all(&[0; 1 << 16]).map_err(VizError::io(&full))
+    })
+    .unwrap_err();
+    assert!(err.to_string().contains("No space left"), "{err}");
+    let err = write_atomic_path(&full, |tmp| fs::write(tmp, b"x").map_err(VizError::io(tmp)))
+        .unwrap_err();
+    assert!(
+        matches!(&err, VizError::Io { path, .. } if *path == full),
+        "{err}"
+    );
+    check(&null);
+    check(&full);
+}
+
 /// A null device takes the bytes and stays a device (pf-viz run as root used to rename a
 /// regular file over `/dev/null`); a full one refuses them, on one line, and no temporary
 /// file is left beside either.
 #[test]
 fn out_on_a_device_is_written_in_place() {
-    let s = Scratch::new("dev");
-    let (Some(null), Some(full)) = (
-        test_device(s.dir(), "null", 3),
-        test_device(s.dir(), "full", 7),
-    ) else {
-        eprintln!("no device node to write to safely here: skipped");
+    let Some((_s, null, full)) = devices("dev") else {
         return;
     };
     let (null, full) = (null.to_string_lossy(), full.to_string_lossy());
