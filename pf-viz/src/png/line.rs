@@ -7,7 +7,7 @@ use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::style::{self, AxisFonts, Dash, LegendPos, Marker, plot_err};
+use super::style::{self, AxisFonts, AxisScale, Dash, LegendPos, Marker, plot_err};
 use super::{Canvas, render_png};
 use crate::error::{Result, VizError};
 
@@ -56,6 +56,9 @@ pub struct LinePlot {
     pub title: String,
     /// x-axis description, with units.
     pub x_label: String,
+    /// How the x axis places its values.
+    #[serde(default)]
+    pub x_scale: AxisScale,
     /// y-axis description, with units.
     pub y_label: String,
     /// The series, in drawing order.
@@ -108,6 +111,12 @@ impl LinePlot {
             if let Some(v) = values.into_iter().find(|v| !v.is_finite()) {
                 return bad(format!("series '{}': value {v} is not finite", s.name));
             }
+            if let Some(v) = self.x_scale.first_unplaceable(s.x.iter().copied()) {
+                return bad(format!(
+                    "series '{}': x value {v} on a log scale (must be positive)",
+                    s.name
+                ));
+            }
         }
         if let Some((lo, hi)) = self.y_range
             && (lo >= hi || lo.is_nan() || hi.is_nan())
@@ -115,6 +124,18 @@ impl LinePlot {
             return bad(format!("empty y range {lo}..{hi}"));
         }
         Ok(())
+    }
+
+    /// The plot in the chart's coordinates: x mapped by its scale.
+    fn drawn(&self) -> std::borrow::Cow<'_, LinePlot> {
+        if self.x_scale == AxisScale::Linear {
+            return std::borrow::Cow::Borrowed(self);
+        }
+        let mut p = self.clone();
+        for s in &mut p.series {
+            s.x.iter_mut().for_each(|x| *x = self.x_scale.map(*x));
+        }
+        std::borrow::Cow::Owned(p)
     }
 
     fn extent(&self) -> ((f64, f64), (f64, f64)) {
@@ -202,7 +223,7 @@ impl LinePlot {
 /// Inconsistent data ([`VizError::PlotData`]), or a plot or I/O error naming `path`.
 pub fn render(path: &Path, plot: &LinePlot) -> Result<()> {
     plot.validate()?;
-    render_png(path, |root| draw(root, path, plot))
+    render_png(path, |root| draw(root, path, &plot.drawn()))
 }
 
 fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
@@ -222,7 +243,7 @@ fn draw(root: &Canvas<'_>, path: &Path, plot: &LinePlot) -> Result<()> {
     style::draw_mesh(
         &mut chart,
         path,
-        &plot.x_label,
+        (&plot.x_label, plot.x_scale),
         &plot.y_label,
         AxisFonts::FULL,
     )?;
@@ -345,6 +366,7 @@ mod tests {
         LinePlot {
             title: "t".into(),
             x_label: "x".into(),
+            x_scale: AxisScale::Linear,
             y_label: "y".into(),
             series: vec![Series {
                 name: "a series".into(),
@@ -391,6 +413,7 @@ mod tests {
         let mut p = LinePlot {
             title: "t".into(),
             x_label: "x".into(),
+            x_scale: AxisScale::Linear,
             y_label: "y".into(),
             series: vec![Series {
                 name: "s".into(),
@@ -411,5 +434,27 @@ mod tests {
         p.series[0].band = None;
         p.series[0].y.push(3.0);
         assert!(p.validate().is_err());
+    }
+
+    /// On a log scale a series is drawn at the logarithms of its x values, and an x of 0
+    /// is refused with the series named rather than drawn at −∞.
+    #[test]
+    fn log_scaled_series_are_drawn_at_their_logarithms() {
+        let mut p = ramp(LegendPos::UpperRight, true);
+        p.x_scale = AxisScale::Log10;
+        p.series[0].x = (0..=10).map(|k| 10f64.powi(k)).collect();
+        p.validate().unwrap();
+        let drawn = p.drawn();
+        assert_eq!(
+            drawn.series[0].x,
+            (0..=10).map(f64::from).collect::<Vec<_>>()
+        );
+        assert_eq!(drawn.series[0].y, p.series[0].y);
+        p.series[0].x[3] = 0.0;
+        let err = p.validate().unwrap_err().to_string();
+        assert!(
+            err.contains("'a series'") && err.contains("log scale"),
+            "{err}"
+        );
     }
 }

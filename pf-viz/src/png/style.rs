@@ -317,25 +317,77 @@ impl AxisFonts {
     };
 }
 
-/// Draw the shared mesh: light grid, ink axes, short tick labels, axis descriptions.
+/// How an x axis places its values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AxisScale {
+    /// Evenly.
+    #[default]
+    Linear,
+    /// By their base-10 logarithm, for sweeps over decades (lags, particle counts); every
+    /// value must be positive. The ticks show the values, one per decade.
+    Log10,
+}
+
+impl AxisScale {
+    /// Where `x` is drawn. The charts stay linear in what they draw: plotters' own log
+    /// coordinates would give a log-scaled chart a type of its own, which every renderer's
+    /// drawing code would then have to be generic over.
+    pub fn map(self, x: f64) -> f64 {
+        match self {
+            AxisScale::Linear => x,
+            AxisScale::Log10 => x.log10(),
+        }
+    }
+
+    /// The value drawn at `t`, for its tick label.
+    fn unmap(self, t: f64) -> f64 {
+        match self {
+            AxisScale::Linear => t,
+            // Decades exactly, so that ticks read 10 and 100, not 99.99999999999997.
+            AxisScale::Log10 if t == t.round() => 10f64.powi(t as i32),
+            AxisScale::Log10 => 10f64.powf(t),
+        }
+    }
+
+    /// The first value that cannot be drawn on this scale (≤ 0 or NaN on a log scale).
+    pub fn first_unplaceable(self, xs: impl IntoIterator<Item = f64>) -> Option<f64> {
+        match self {
+            AxisScale::Linear => None,
+            AxisScale::Log10 => xs.into_iter().find(|&x| x.is_nan() || x <= 0.0),
+        }
+    }
+}
+
+/// Draw the shared mesh: light grid, ink axes, short tick labels, axis descriptions. On a
+/// [`AxisScale::Log10`] x axis the chart's x coordinates are logarithms: the ticks sit at whole
+/// decades and show their values.
 ///
 /// # Errors
 /// A plot error naming `path`.
 pub fn draw_mesh(
     chart: &mut Chart<'_, '_>,
     path: &std::path::Path,
-    x_label: &str,
+    (x_label, x_scale): (&str, AxisScale),
     y_label: &str,
     fonts: AxisFonts,
 ) -> Result<()> {
     use plotters::style::Color;
+    let x_ticks = match x_scale {
+        AxisScale::Linear => 10,
+        AxisScale::Log10 => {
+            let r = chart.x_range();
+            (r.end.floor() - r.start.ceil()).max(1.0) as usize + 1
+        }
+    };
     chart
         .configure_mesh()
         .x_desc(x_label)
         .y_desc(y_label)
         .axis_desc_style(text(fonts.label))
         .label_style(text(fonts.tick))
-        .x_label_formatter(&|x| tick_label(*x))
+        .x_labels(x_ticks)
+        .x_label_formatter(&|x| tick_label(x_scale.unmap(*x)))
         .y_label_formatter(&|y| tick_label(*y))
         .bold_line_style(GRID.stroke_width(1))
         .light_line_style(plotters::style::WHITE.stroke_width(0))
@@ -428,6 +480,23 @@ mod tests {
     fn fonts_register_and_repeat() {
         init_fonts().unwrap();
         init_fonts().unwrap();
+    }
+
+    /// A log axis draws decades at whole numbers and labels them with the exact values;
+    /// it cannot place zero, negative or NaN values, and a linear axis places everything.
+    #[test]
+    fn log_axes_map_decades_and_refuse_what_they_cannot_place() {
+        let log = AxisScale::Log10;
+        assert_eq!(log.map(1000.0), 3.0);
+        for (t, label) in [(0.0, "1"), (1.0, "10"), (2.0, "100"), (4.0, "10000")] {
+            assert_eq!(tick_label(log.unmap(t)), label);
+        }
+        assert_eq!(tick_label(log.unmap(0.5)), "3.162");
+        assert_eq!(log.first_unplaceable([3.0, 0.0, -1.0]), Some(0.0));
+        assert!(log.first_unplaceable([f64::NAN]).is_some_and(f64::is_nan));
+        assert_eq!(log.first_unplaceable([1e-300, 5.0]), None);
+        assert_eq!(AxisScale::Linear.first_unplaceable([0.0, -1.0]), None);
+        assert_eq!(AxisScale::Linear.unmap(-2.5), -2.5);
     }
 
     #[test]

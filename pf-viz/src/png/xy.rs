@@ -1,9 +1,9 @@
 //! Plots in the plane with equal axes: paths, points, segments (bearing rays, association
 //! lines), error ellipses and text labels.
 //!
-//! One metre is one metre in both directions unless the caller fixes the ranges, so
-//! trajectories and ellipses keep their true shape. Layers are drawn in order: put context
-//! (particle clouds, clutter) first.
+//! One metre is one metre in both directions unless the caller fixes the ranges or the x
+//! axis is logarithmic, so trajectories and ellipses keep their true shape. Layers are drawn
+//! in order: put context (particle clouds, clutter) first.
 
 use std::path::Path;
 
@@ -14,7 +14,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::render_png;
-use super::style::{self, AxisFonts, Dash, LegendPos, Marker, plot_err};
+use super::style::{self, AxisFonts, AxisScale, Dash, LegendPos, Marker, plot_err};
 use crate::error::{Result, VizError};
 
 /// Points on each ellipse outline.
@@ -62,6 +62,9 @@ pub struct XyPlot {
     pub title: String,
     /// x-axis description, with units.
     pub x_label: String,
+    /// How the x axis places its values; a log scale takes no ellipses (they would not
+    /// stay ellipses) and keeps the axes' scales independent.
+    pub x_scale: AxisScale,
     /// y-axis description, with units.
     pub y_label: String,
     /// Drawn in order (context layers first).
@@ -124,11 +127,53 @@ impl XyPlot {
                 return bad(format!("{:?}: bad {what} range {lo}..{hi}", self.title));
             }
         }
+        if self.x_scale == AxisScale::Log10 {
+            if let Some(l) = self
+                .layers
+                .iter()
+                .find(|l| matches!(l.kind, LayerKind::Ellipses(_)))
+            {
+                return bad(format!(
+                    "{:?}: layer {:?} draws ellipses on a log scale",
+                    self.title, l.name
+                ));
+            }
+            let xs = self.layers.iter().flat_map(Layer::points).map(|p| p[0]);
+            let range = self.x_range.iter().flat_map(|&(lo, hi)| [lo, hi]);
+            if let Some(x) = self.x_scale.first_unplaceable(xs.chain(range)) {
+                return bad(format!(
+                    "{:?}: x value {x} on a log scale (must be positive)",
+                    self.title
+                ));
+            }
+        }
         Ok(())
     }
 
-    /// The axis ranges: the fixed ones, or the layers' extent padded by 5 % and widened in
-    /// one direction so that a unit has the same length on both axes of a `w`×`h` px plot.
+    /// The plot in the chart's coordinates: x mapped by its scale.
+    fn drawn(&self) -> std::borrow::Cow<'_, XyPlot> {
+        let scale = self.x_scale;
+        if scale == AxisScale::Linear {
+            return std::borrow::Cow::Borrowed(self);
+        }
+        let mut p = self.clone();
+        let map = |q: &mut [f64; 2]| q[0] = scale.map(q[0]);
+        for l in &mut p.layers {
+            match &mut l.kind {
+                LayerKind::Path(v) | LayerKind::Points(v) => v.iter_mut().for_each(map),
+                LayerKind::Segments(v) => v.iter_mut().flatten().for_each(map),
+                LayerKind::Labels(v) => v.iter_mut().for_each(|(q, _)| map(q)),
+                // Refused by `validate` on a log scale.
+                LayerKind::Ellipses(_) => {}
+            }
+        }
+        p.x_range = self.x_range.map(|(lo, hi)| (scale.map(lo), scale.map(hi)));
+        std::borrow::Cow::Owned(p)
+    }
+
+    /// The axis ranges: the fixed ones, or the layers' extent padded by 5 % and, on a linear
+    /// x axis, widened in one direction so that a unit has the same length on both axes of a
+    /// `w`×`h` px plot.
     fn ranges(&self, w: f64, h: f64) -> ((f64, f64), (f64, f64)) {
         let pts: Vec<[f64; 2]> = self.layers.iter().flat_map(Layer::points).collect();
         let extent = |i: usize| {
@@ -145,7 +190,7 @@ impl XyPlot {
         let y = self
             .y_range
             .unwrap_or_else(|| style::padded(y_lo, y_hi, 0.05));
-        if self.x_range.is_some() || self.y_range.is_some() {
+        if self.x_range.is_some() || self.y_range.is_some() || self.x_scale != AxisScale::Linear {
             return (x, y);
         }
         let per_px = ((x.1 - x.0) / w).max((y.1 - y.0) / h);
@@ -164,7 +209,7 @@ impl XyPlot {
 /// [`VizError::PlotData`] for inconsistent data; a plot or I/O error naming `path`.
 pub fn render(path: &Path, plot: &XyPlot) -> Result<()> {
     plot.validate()?;
-    render_png(path, |root| draw(root, path, plot, Fonts::FULL))
+    render_png(path, |root| draw(root, path, &plot.drawn(), Fonts::FULL))
 }
 
 /// Render several panels in a grid of `cols` columns, under one overall `title`.
@@ -189,7 +234,7 @@ pub fn render_grid(path: &Path, title: &str, panels: &[XyPlot], cols: usize) -> 
         let inner = root.titled(title, style::title()).map_err(&err)?;
         let areas = inner.split_evenly((rows, cols));
         for (area, p) in areas.iter().zip(panels) {
-            draw(area, path, p, Fonts::PANEL)?;
+            draw(area, path, &p.drawn(), Fonts::PANEL)?;
         }
         Ok(())
     })
@@ -257,7 +302,13 @@ fn draw(
         tick: f.tick,
         legend: f.legend,
     };
-    style::draw_mesh(&mut chart, path, &plot.x_label, &plot.y_label, axis_fonts)?;
+    style::draw_mesh(
+        &mut chart,
+        path,
+        (&plot.x_label, plot.x_scale),
+        &plot.y_label,
+        axis_fonts,
+    )?;
 
     let mut any_legend = false;
     for layer in &plot.layers {
@@ -381,6 +432,7 @@ mod tests {
         XyPlot {
             title: "t".into(),
             x_label: "x (m)".into(),
+            x_scale: AxisScale::Linear,
             y_label: "y (m)".into(),
             layers: vec![
                 Layer {
@@ -419,6 +471,42 @@ mod tests {
         let mut q = plot();
         q.x_range = Some((1.0, 1.0));
         assert!(q.validate().is_err());
+    }
+
+    /// A log scale maps the x of every layer and of the fixed range, keeps y, and refuses
+    /// ellipses and values it cannot place.
+    #[test]
+    fn log_scaled_layers_are_mapped_and_checked() {
+        let mut p = plot();
+        p.x_scale = AxisScale::Log10;
+        p.layers[0].kind = LayerKind::Path(vec![[1.0, 0.0], [100.0, 10.0]]);
+        p.layers[1].kind = LayerKind::Labels(vec![([10.0, 5.0], "a".into())]);
+        p.x_range = Some((1.0, 1000.0));
+        p.validate().unwrap();
+        let d = p.drawn();
+        assert_eq!(
+            d.layers[0].kind,
+            LayerKind::Path(vec![[0.0, 0.0], [2.0, 10.0]])
+        );
+        assert_eq!(
+            d.layers[1].kind,
+            LayerKind::Labels(vec![([1.0, 5.0], "a".into())])
+        );
+        assert_eq!(d.x_range, Some((0.0, 3.0)));
+        let mut zero = p.clone();
+        zero.x_range = Some((0.0, 1000.0));
+        assert!(zero.validate().is_err());
+        p.layers.push(Layer {
+            name: "gate".into(),
+            style: XyStyle::Series(3),
+            kind: LayerKind::Ellipses(vec![ErrorEllipse {
+                centre: [50.0, 5.0],
+                semi_axes: [20.0, 5.0],
+                angle: 0.3,
+            }]),
+        });
+        let err = p.validate().unwrap_err().to_string();
+        assert!(err.contains("ellipses"), "{err}");
     }
 
     #[test]

@@ -20,7 +20,7 @@ use crate::error::{Result, VizError};
 use crate::png;
 use crate::png::genealogy::{GenealogyData, GenealogyLabels};
 use crate::png::line::{LinePlot, RefLine, Series};
-use crate::png::style::LegendPos;
+use crate::png::style::{AxisScale, LegendPos};
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
@@ -170,6 +170,7 @@ pub fn run(ctx: &Context<'_>, config: CoreConfig) -> Result<CoreResult> {
     let ess_plot = LinePlot {
         title: format!("Effective sample size and surviving ancestors, N = {n_particles}"),
         x_label: "time index k (steps)".into(),
+        x_scale: AxisScale::Linear,
         y_label: "number of particles".into(),
         series: vec![
             Series {

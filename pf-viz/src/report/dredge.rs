@@ -10,7 +10,7 @@ use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
 use crate::png::histogram::{self, HistData, HistPanel, HistStats, HistogramPlot};
 use crate::png::line::{self, Band, LinePlot, Series};
-use crate::png::style::LegendPos;
+use crate::png::style::{AxisScale, LegendPos};
 use pf_dredge::experiments::{
     self as ex, CycleConfig, Fig7Config, Fig7Result, Fig8Config, Fig8Result, Fig56Config,
     Fig56Result, NSweepConfig, NSweepResult,
@@ -84,6 +84,7 @@ fn plot(title: &str, y_label: &str, series: Vec<Series>, legend: LegendPos) -> L
     LinePlot {
         title: title.into(),
         x_label: "time t (s)".into(),
+        x_scale: AxisScale::Linear,
         y_label: y_label.into(),
         series,
         ref_lines: vec![],
@@ -109,7 +110,7 @@ fn best_lag(t: &[f64], truth: &[f64], estimate: &[f64]) -> f64 {
     if best == 0 { 0.0 } else { t[best] - t[0] }
 }
 
-/// The N sweep's ρ_o residual std (mean ± s.e. of its replications) at the figures' `n`
+/// The N sweep's ρₒ residual std (mean ± s.e. of its replications) at the figures' `n`
 /// and at its largest N, against the paper's 13.2 kg/m³: the note that rules out Monte Carlo
 /// error and the sweep's caption both quote it.
 fn sweep_rho_std(ns: &ex::NSweepResult, n: usize) -> String {
@@ -183,10 +184,10 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         &ctx.path("dredge-fig3-inputs.png"),
         &plot(
             "Fig. 3: incoming mixture",
-            "ρ_i (kg/m³); Q_i × 100 (m³/s)",
+            "ρᵢ (kg/m³); Qᵢ × 100 (m³/s)",
             vec![
-                series("ρ_i (kg/m³)", &c.t, c.rho_i.iter().copied()),
-                series("Q_i × 100 (m³/s)", &c.t, c.q_i.iter().map(|q| q * 100.0)),
+                series("ρᵢ (kg/m³)", &c.t, c.rho_i.iter().copied()),
+                series("Qᵢ × 100 (m³/s)", &c.t, c.q_i.iter().map(|q| q * 100.0)),
             ],
             LegendPos::LowerRight,
         ),
@@ -194,7 +195,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     fig(
         "dredge-fig3-inputs.png",
         "Fig. 3. Paper: flow-rate and density of the incoming mixture of one real cycle. Ours: \
-         the simulator's inputs (Q_i scaled by 100 to share the axis): the dredge pump's flow \
+         the simulator's inputs (Qᵢ scaled by 100 to share the axis): the dredge pump's flow \
          and the mixture density, the measured disturbance."
             .into(),
     );
@@ -208,10 +209,10 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         .copied()
         .fold(f64::NEG_INFINITY, f64::max);
     let mut s4 = vec![
-        series("m_t (tonnes)", &c.t, m_kt.iter().copied()),
-        series("V_t (m³)", &c.t, c.v_t.iter().copied()),
+        series("mₜ (tonnes)", &c.t, m_kt.iter().copied()),
+        series("Vₜ (m³)", &c.t, c.v_t.iter().copied()),
         thin(
-            series("h_o × 1000 (m)", &c.t, c.h_o.iter().map(|h| h * 1000.0)),
+            series("hₒ × 1000 (m)", &c.t, c.h_o.iter().map(|h| h * 1000.0)),
             stride(c.len()),
         ),
     ];
@@ -229,7 +230,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         &ctx.path("dredge-fig4-phases.png"),
         &plot(
             "Fig. 4: loading phases",
-            "m_t (tonnes); V_t (m³); h_o × 1000 (m)",
+            "mₜ (tonnes); Vₜ (m³); hₒ × 1000 (m)",
             s4,
             LegendPos::LowerRight,
         ),
@@ -237,9 +238,9 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     fig(
         "dredge-fig4-phases.png",
         "Fig. 4. Paper: hopper mass and volume of a real cycle as the overflow height is \
-         manipulated, phase transitions dashed. Ours (phase 2 bracketed): the simulated cycle (true m_t, V_t, and \
-         h_o); phase 1 fills without overflow, in phase 2 V_t is constant (Q_o ≈ Q_i) while m_t \
-         still rises, in phase 3 the PID on h_o holds m_t at m_max while V_t falls."
+         manipulated, phase transitions dashed. Ours (phase 2 bracketed): the simulated cycle (true mₜ, Vₜ, and \
+         hₒ); phase 1 fills without overflow, in phase 2 Vₜ is constant (Qₒ ≈ Qᵢ) while mₜ \
+         still rises, in phase 3 the PID on hₒ holds mₜ at m_max while Vₜ falls."
             .into(),
     );
 
@@ -248,13 +249,13 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         &ctx.path("dredge-fig5-estimates.png"),
         &plot(
             "Fig. 5: simulated and estimated overflow, phase 3",
-            "ρ_o (kg/m³); Q_o × 100 (m³/s)",
+            "ρₒ (kg/m³); Qₒ × 100 (m³/s)",
             vec![
-                series("ρ_o simulated", &f56.t, f56.rho_o_true.iter().copied()),
-                series("ρ_o PF estimate", &f56.t, f56.rho_o_hat.iter().copied()),
+                series("ρₒ simulated", &f56.t, f56.rho_o_true.iter().copied()),
+                series("ρₒ PF estimate", &f56.t, f56.rho_o_hat.iter().copied()),
                 thin(
                     series(
-                        "Q_o × 100 simulated",
+                        "Qₒ × 100 simulated",
                         &f56.t,
                         f56.q_o_true.iter().map(|q| q * 100.0),
                     ),
@@ -262,7 +263,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
                 ),
                 thin(
                     series(
-                        "Q_o × 100 PF estimate",
+                        "Qₒ × 100 PF estimate",
                         &f56.t,
                         f56.q_o_hat.iter().map(|q| q * 100.0),
                     ),
@@ -275,10 +276,10 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     fig(
         "dredge-fig5-estimates.png",
         format!(
-            "Fig. 5. Paper: simulated (thin) and PF-estimated (thick) Q_o and ρ_o in phase 3. \
+            "Fig. 5. Paper: simulated (thin) and PF-estimated (thick) Qₒ and ρₒ in phase 3. \
              Ours: the same with N = {}, σ(ε_x) = [0, 3000, 0.2, 5], σ(ε_y) = [10, 12000]. \
-             ρ_o is tracked well while it is flat and lags on the fast rises and falls of our \
-             simulated ρ_o (see notes): shifting the estimate back by {:.0} s matches the two \
+             ρₒ is tracked well while it is flat and lags on the fast rises and falls of our \
+             simulated ρₒ (see notes): shifting the estimate back by {:.0} s matches the two \
              best.",
             fig5_6_config.filter.n_particles,
             best_lag(&f56.t, &f56.rho_o_true, &f56.rho_o_hat)
@@ -308,16 +309,16 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         &HistogramPlot {
             title: "Fig. 6: residual distributions, phase 3".into(),
             panels: vec![
-                panel("Q_o", "m³/s", &f56.q_o_hist, &f56.q_o),
-                panel("ρ_o", "kg/m³", &f56.rho_o_hist, &f56.rho_o),
+                panel("Qₒ", "m³/s", &f56.q_o_hist, &f56.q_o),
+                panel("ρₒ", "kg/m³", &f56.rho_o_hist, &f56.rho_o),
             ],
         },
     )?;
     fig(
         "dredge-fig6-residuals.png",
         format!(
-            "Fig. 6. Paper: residual histograms, Q_o mean −0.023, std 0.345 m³/s; ρ_o mean \
-             3.613, std 13.226 kg/m³. Ours: Q_o mean {:.3}, std {:.3} m³/s; ρ_o mean {:.2}, \
+            "Fig. 6. Paper: residual histograms, Qₒ mean −0.023, std 0.345 m³/s; ρₒ mean \
+             3.613, std 13.226 kg/m³. Ours: Qₒ mean {:.3}, std {:.3} m³/s; ρₒ mean {:.2}, \
              std {:.2} kg/m³ (table dredge-residuals puts them beside the paper's, relative to \
              the signal ranges).",
             f56.q_o.ours.mean, f56.q_o.ours.std, f56.rho_o.ours.mean, f56.rho_o.ours.std
@@ -326,26 +327,26 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
 
     // Fig. 7: PF against direct computation.
     let t7 = &f7.t;
-    // ρ̄_o of (16) divides by a noisy Q̄_o: where Q̄_o is barely above the threshold (phase
+    // ρ̄ₒ of (16) divides by a noisy Q̄ₒ: where Q̄ₒ is barely above the threshold (phase
     // 1, filter start-up at the edges) it shoots to thousands; the axis is held to the
     // range of the PF estimate so the overflow period stays readable.
     let rho_top = f7.rho_o_pf.iter().copied().fold(1100.0, f64::max) * 1.3;
     let mut p7 = plot(
         "Fig. 7: PF against direct computation (15)–(16)",
-        "ρ_o (kg/m³); Q_o × 100 (m³/s)",
+        "ρₒ (kg/m³); Qₒ × 100 (m³/s)",
         vec![
-            series("ρ_o PF", t7, f7.rho_o_pf.iter().copied()),
-            defined("ρ_o direct", t7, &f7.rho_o_direct, 1.0),
+            series("ρₒ PF", t7, f7.rho_o_pf.iter().copied()),
+            defined("ρₒ direct", t7, &f7.rho_o_direct, 1.0),
             thin(
-                series("Q_o × 100 PF", t7, f7.q_o_pf.iter().map(|q| q * 100.0)),
+                series("Qₒ × 100 PF", t7, f7.q_o_pf.iter().map(|q| q * 100.0)),
                 stride(t7.len()),
             ),
             thin(
-                defined("Q_o × 100 direct", t7, &f7.q_o_direct, 100.0),
+                defined("Qₒ × 100 direct", t7, &f7.q_o_direct, 100.0),
                 stride(t7.len()),
             ),
         ],
-        // The lower right is empty: Q_o and ρ_o both run high there.
+        // The lower right is empty: Qₒ and ρₒ both run high there.
         LegendPos::LowerRight,
     );
     p7.y_range = Some((-50.0, rho_top));
@@ -354,14 +355,14 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         "dredge-fig7-direct.png",
         format!(
             "Fig. 7. Paper: on real data, PF estimates (thick) against the direct computation \
-             (15)–(16) on zero-phase low-passed (0.001 Hz) V_t, m_t (thin). Ours: the same on \
-             the simulated cycle (we have no ship data); ρ̄_o is left out where Q̄_o < 0.5 \
-             m³/s, and the axis is clipped at 1.3 × the PF's largest ρ_o: in phase 1 ρ̄_o \
-             divides by a Q̄_o that is only start-up noise and reaches thousands.{} The \
+             (15)–(16) on zero-phase low-passed (0.001 Hz) Vₜ, mₜ (thin). Ours: the same on \
+             the simulated cycle (we have no ship data); ρ̄ₒ is left out where Q̄ₒ < 0.5 \
+             m³/s, and the axis is clipped at 1.3 × the PF's largest ρₒ: in phase 1 ρ̄ₒ \
+             divides by a Q̄ₒ that is only start-up noise and reaches thousands.{} The \
              direct computation is anti-causal, so it cannot run on line.",
             match f7.q_o_direct.iter().flatten().next() {
                 Some(q) => format!(
-                    " The direct Q̄_o starts at {q:.1} m³/s where no overflow runs yet: the \
+                    " The direct Q̄ₒ starts at {q:.1} m³/s where no overflow runs yet: the \
                      zero-phase filter's transient at the record's edge."
                 ),
                 None => String::new(),
@@ -374,8 +375,8 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     line::render(
         &ctx.path("dredge-fig8-band.png"),
         &plot(
-            "Fig. 8: spread of ρ_o estimates over independent runs",
-            "ρ_o (kg/m³)",
+            "Fig. 8: spread of ρₒ estimates over independent runs",
+            "ρₒ (kg/m³)",
             vec![
                 Series {
                     name: format!("mean of {} runs, min–max", fig8_config.runs),
@@ -386,7 +387,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
                         upper: f8.rho_o.max.clone(),
                     }),
                 },
-                series("ρ_o simulated", t8, f8.rho_o_true.iter().copied()),
+                series("ρₒ simulated", t8, f8.rho_o_true.iter().copied()),
             ],
             LegendPos::UpperLeft,
         ),
@@ -394,7 +395,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     fig(
         "dredge-fig8-band.png",
         format!(
-            "Fig. 8. Paper: grey band = min–max of ρ_o estimates over 25 independent PF runs on \
+            "Fig. 8. Paper: grey band = min–max of ρₒ estimates over 25 independent PF runs on \
              the same real data, bold = their mean. Ours: {} runs with N = {} on one simulated \
              cycle; mean band width in phase 3: {:.1} kg/m³.",
             fig8_config.runs, fig8_config.filter.n_particles, f8.mean_rho_o_width_phase3
@@ -402,7 +403,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     );
 
     // N sweep.
-    let n: Vec<f64> = ns.rows.iter().map(|r| (r.n as f64).log10()).collect();
+    let n: Vec<f64> = ns.rows.iter().map(|r| r.n as f64).collect();
     let band = |m: &dyn Fn(&ex::NSweepRow) -> (f64, f64), k: f64| Band {
         lower: ns
             .rows
@@ -418,16 +419,16 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     };
     let mut sweep = plot(
         "Residual std against the number of particles N",
-        "ρ_o std (kg/m³); Q_o std × 10 (m³/s)",
+        "ρₒ std (kg/m³); Qₒ std × 10 (m³/s)",
         vec![
             Series {
-                name: "ρ_o residual std, ± 2 s.e.".into(),
+                name: "ρₒ residual std, ± 2 s.e.".into(),
                 x: n.clone(),
                 y: ns.rows.iter().map(|r| r.rho_o_std).collect(),
                 band: Some(band(&|r| (r.rho_o_std, r.rho_o_std_se), 1.0)),
             },
             Series {
-                name: "Q_o residual std × 10, ± 2 s.e.".into(),
+                name: "Qₒ residual std × 10, ± 2 s.e.".into(),
                 x: n.clone(),
                 y: ns.rows.iter().map(|r| r.q_o_std * 10.0).collect(),
                 band: Some(band(&|r| (r.q_o_std, r.q_o_std_se), 10.0)),
@@ -435,15 +436,16 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         ],
         LegendPos::UpperRight,
     );
-    sweep.x_label = "log₁₀ N (N = number of particles)".into();
+    sweep.x_label = "number of particles N".into();
+    sweep.x_scale = AxisScale::Log10;
     line::render(&ctx.path("dredge-n-sweep.png"), &sweep)?;
     fig(
         "dredge-n-sweep.png",
         format!(
             "Beyond the paper: phase-3 residual std against N ({} replications per N on the \
              figures' cycle, band ± 2 standard errors), to choose N for the on-board time \
-             budget. Below a few hundred particles some runs lose the track of ρ_o (wide band \
-             at N = 100). Its ρ_o std is {}.",
+             budget. Below a few hundred particles some runs lose the track of ρₒ (wide band \
+             at N = 100). Its ρₒ std is {}.",
             n_sweep_config.reps,
             sweep_rho_std(&ns, fig5_6_config.filter.n_particles)
         ),
@@ -496,33 +498,33 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         .map(String::from)
         .to_vec(),
         rows: vec![
-            row("Q_o (m³/s)", q, dstd(d.q_o)),
-            row("ρ_o (kg/m³)", r, dstd(d.rho_o)),
+            row("Qₒ (m³/s)", q, dstd(d.q_o)),
+            row("ρₒ (kg/m³)", r, dstd(d.rho_o)),
         ],
     }];
 
     let notes = vec![
         format!(
-            "Q_o: our residual std {:.3} m³/s against the paper's 0.345; a linearised Kalman \
+            "Qₒ: our residual std {:.3} m³/s against the paper's 0.345; a linearised Kalman \
              filter with the paper's noise levels (σ(ε_x) = [0, 3000, 0.2, 5], σ(ε_y) = [10, \
-             12000], T_s = 5 s, Q_o ≈ 9 m³/s, ρ_o ≈ 1200 kg/m³) has a steady-state posterior std \
-             of 0.40 m³/s for Q_o, so both are at what these noise levels allow.",
+             12000], T_s = 5 s, Qₒ ≈ 9 m³/s, ρₒ ≈ 1200 kg/m³) has a steady-state posterior std \
+             of 0.40 m³/s for Qₒ, so both are at what these noise levels allow.",
             q.ours.std
         ),
         format!(
-            "ρ_o: our residual std {:.1} kg/m³ is about {:.1}× the paper's 13.2 ({:.1} % of our \
+            "ρₒ: our residual std {:.1} kg/m³ is about {:.1}× the paper's 13.2 ({:.1} % of our \
              range {:.0} kg/m³ against about 3.3 % of the paper's ≈ 400). Found out, not \
              guessed: (1) not Monte Carlo error: over the N sweep's replications the std is \
-             {}; (2) not the noise: while our simulated ρ_o is flat (at ρ_w, first half \
+             {}; (2) not the noise: while our simulated ρₒ is flat (at ρ_w, first half \
              of phase 3) the residual std is 5–9 kg/m³, matching the 7.2 kg/m³ that the \
              measurement noise alone leaves in the linearised filter; (3) it is our \
-             simulator's ρ_o: when the sand bed reaches the overflow the linear profile (6) \
-             makes ρ_o rise by ~200 kg/m³ in ~150 s, and the PID moving h_o through the steep \
+             simulator's ρₒ: when the sand bed reaches the overflow the linear profile (6) \
+             makes ρₒ rise by ~200 kg/m³ in ~150 s, and the PID moving hₒ through the steep \
              profile swings it by ±100 kg/m³ within minutes. The random walk σ(ε_x4) = 5 kg/m³ \
              per 5 s gives the filter an ~85 s lag (a 0.5 kg/m³-per-step ramp alone costs a \
              ~9 kg/m³ bias, hence our positive mean); these transients make the excess. The \
-             paper's own tuning has a steady-state ρ_o posterior std of 21 kg/m³ in the \
-             linearised filter, so its 13.2 implies a smoother simulated ρ_o than ours.",
+             paper's own tuning has a steady-state ρₒ posterior std of 21 kg/m³ in the \
+             linearised filter, so its 13.2 implies a smoother simulated ρₒ than ours.",
             r.ours.std,
             r.ours.std / 13.226,
             100.0 * r.relative_std,
@@ -532,7 +534,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         "Values the paper leaves unstated, chosen physically plausible (crate README lists them \
          with units): hopper area A, k_o, k'_o, k_c, v_s, β, ρ_q, ρ_s, ρ_w, the inflow \
          profiles, PID gains, m_max; the prior p(x_0) (centred on the first measurement); the \
-         direct computation's threshold Q̄_o ≥ 0.5 m³/s below which (16) is not divided."
+         direct computation's threshold Q̄ₒ ≥ 0.5 m³/s below which (16) is not divided."
             .into(),
         "Figs. 3, 5 and 7 draw two signals of different units on one axis, Q scaled by 100; the \
          paper's Fig. 7 and 8 are on real ship data, which we do not have: ours are on the \

@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
 use crate::png::rec::{RecPanel, RecPlot, RecSeries};
-use crate::png::style::LegendPos;
+use crate::png::style::{AxisScale, LegendPos};
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle, render_grid};
 use pf_core::mc::Scale;
 
@@ -538,6 +538,7 @@ fn frames_figure(
         panels.push(XyPlot {
             title: format!("{rel} (frame {f})"),
             x_label: "x (scene units)".into(),
+            x_scale: AxisScale::Linear,
             y_label: "y (scene units)".into(),
             layers,
             legend: LegendPos::UpperRight,

@@ -21,7 +21,7 @@ use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
 use crate::png;
 use crate::png::line::{LinePlot, RefLine, Series};
-use crate::png::style::LegendPos;
+use crate::png::style::{AxisScale, LegendPos};
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle};
 use pf_core::mc::Scale;
 
@@ -198,6 +198,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
                 rmse_cfg.realisations
             ),
             x_label: "time (s)".into(),
+            x_scale: AxisScale::Linear,
             y_label: "RMS position error (m)".into(),
             series,
             ref_lines: vec![],
@@ -246,6 +247,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         &LinePlot {
             title: "Ablation: final RMS error against the number of λ steps".into(),
             x_label: "λ steps m".into(),
+            x_scale: AxisScale::Linear,
             y_label: "final RMS position error (m)".into(),
             series: vec![
                 present("OHF", &steps, &abl.ohf_by_steps),
@@ -268,6 +270,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         &LinePlot {
             title: "Ablation: final RMS error against the polar-grid resolution".into(),
             x_label: "grid points n_β · n_r".into(),
+            x_scale: AxisScale::Linear,
             y_label: "final RMS position error (m)".into(),
             series: vec![
                 present("OHF", &grid_pts, &abl.ohf_by_grid),
@@ -478,6 +481,7 @@ fn information_plot(info: &InformationResult, realisations: usize) -> LinePlot {
     LinePlot {
         title: format!("Information per bearing, {realisations} realisations"),
         x_label: "sample k".into(),
+        x_scale: AxisScale::Linear,
         y_label: "½ log det Σ_pred / det Σ_post (nats)".into(),
         series: info
             .curves
@@ -578,6 +582,7 @@ fn scenario_plot(g: &ScenarioGeometry) -> XyPlot {
     XyPlot {
         title: "Fig. 1: bearings-only tracking scenario".into(),
         x_label: "east (m)".into(),
+        x_scale: AxisScale::Linear,
         y_label: "north (m)".into(),
         layers: vec![
             Layer {
@@ -737,6 +742,7 @@ fn ellipse_plot(r: &EllipsesResult, g: &ScenarioGeometry) -> XyPlot {
     XyPlot {
         title: "the prediction's extent, and the observer".into(),
         x_label: "east (m)".into(),
+        x_scale: AxisScale::Linear,
         y_label: "north (m)".into(),
         layers,
         legend: LegendPos::UpperLeft,

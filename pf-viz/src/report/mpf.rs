@@ -18,7 +18,7 @@ use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
 use crate::png;
 use crate::png::line::{LinePlot, RefLine, Series};
-use crate::png::style::LegendPos;
+use crate::png::style::{AxisScale, LegendPos};
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle};
 use pf_core::mc::Scale;
 
@@ -92,9 +92,9 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
                  c3 = 125. Curves for k = 1…4; k = 5…7 (three, two and one points) are in \
                  summary.json.",
                 if nonzero {
-                    "C_t ≠ 0, eq. (12): a Riccati recursion per particle"
+                    "Cₜ ≠ 0, eq. (12): a Riccati recursion per particle"
                 } else {
-                    "C_t = 0, eq. (11): one Riccati recursion for all particles"
+                    "Cₜ = 0, eq. (11): one Riccati recursion for all particles"
                 }
             ),
         });
@@ -298,12 +298,13 @@ fn ratio_plot(r: &RatioResult, nonzero: bool, fig: &str) -> LinePlot {
         title: format!(
             "Fig. {fig}: particles at equal cost, {}",
             if nonzero {
-                "C_t ≠ 0 (eq. 12)"
+                "Cₜ ≠ 0 (eq. 12)"
             } else {
-                "C_t = 0 (eq. 11)"
+                "Cₜ = 0 (eq. 11)"
             }
         ),
         x_label: "state dimension m (n = 2 nonlinear)".into(),
+        x_scale: AxisScale::Linear,
         y_label: "N(k) / N_PF".into(),
         series,
         ref_lines: vec![RefLine {
@@ -356,6 +357,7 @@ fn fig3_plot(r: &Fig3Result) -> XyPlot {
             r.n_particles
         ),
         x_label: "measured time per run (ms)".into(),
+        x_scale: AxisScale::Linear,
         y_label: "predicted time, eq. (11) (ms)".into(),
         layers: vec![
             Layer {
@@ -399,6 +401,7 @@ fn rmse_plot(t: &TableReport, what: &str, pick: usize) -> LinePlot {
     LinePlot {
         title: format!("RMSE of the {what} per partition, equal time (Table II)"),
         x_label: "time step t".into(),
+        x_scale: AxisScale::Linear,
         y_label: format!("{what} RMSE ({unit})"),
         series,
         ref_lines: vec![],

@@ -31,7 +31,7 @@ use crate::png;
 use crate::png::boxplot::{BoxGroup, BoxPanel, BoxPlot, BoxStats};
 use crate::png::genealogy::{GenealogyData, GenealogyLabels};
 use crate::png::line::RefLine;
-use crate::png::style::LegendPos;
+use crate::png::style::{AxisScale, LegendPos};
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle};
 use pf_core::mc::Scale;
 
@@ -549,6 +549,7 @@ fn sem_figure(ctx: &Context<'_>, config: &SmoothConfig, r: &SemResult) -> Result
             XyPlot {
                 title: name.into(),
                 x_label: "EM iteration".into(),
+                x_scale: AxisScale::Linear,
                 y_label: format!("{name} (dimensionless)"),
                 layers,
                 legend: LegendPos::UpperRight,
@@ -583,7 +584,7 @@ fn sweep_figure(ctx: &Context<'_>, config: &SmoothConfig, sweeps: &[LagSweepResu
                 for (l, samples) in s.fixed_lag.iter().enumerate() {
                     let v = [&samples.phi, &samples.sigma2, &samples.rho2][p];
                     let (m, se) = pf_core::mc::mean_and_se(v);
-                    let x = (s.lags[l] as f64).log10();
+                    let x = s.lags[l] as f64;
                     bias.push([x, m - exact]);
                     sd.push([x, se * (v.len() as f64).sqrt()]);
                 }
@@ -605,15 +606,17 @@ fn sweep_figure(ctx: &Context<'_>, config: &SmoothConfig, sweeps: &[LagSweepResu
             let x_hi = config
                 .sweep_lags
                 .iter()
-                .map(|&d| (d as f64).log10())
-                .fold(0.0, f64::max);
+                .map(|&d| d as f64)
+                .fold(1.0, f64::max);
             XyPlot {
                 title: name.to_owned(),
-                x_label: "log₁₀ lag δ (1 → 0, 10 → 1, 100 → 2)".into(),
+                x_label: "lag δ".into(),
+                x_scale: AxisScale::Log10,
                 y_label: format!("{name}: bias and std. dev. (dimensionless)"),
                 layers,
                 legend: LegendPos::UpperLeft,
-                x_range: Some((0.0, x_hi.max(0.5))),
+                // Half a decade at least, so a one-lag sweep still has an axis.
+                x_range: Some((1.0, x_hi.max(10f64.sqrt()))),
                 y_range: Some(png::style::padded(lo, hi + 0.6 * (hi - lo), 0.05)),
             }
         })
