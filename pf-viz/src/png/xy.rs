@@ -452,6 +452,19 @@ mod tests {
         }
     }
 
+    /// An ellipse layer (a validation gate).
+    fn gate() -> Layer {
+        Layer {
+            name: "gate".into(),
+            style: XyStyle::Series(3),
+            kind: LayerKind::Ellipses(vec![ErrorEllipse {
+                centre: [50.0, 5.0],
+                semi_axes: [20.0, 5.0],
+                angle: 0.3,
+            }]),
+        }
+    }
+
     #[test]
     fn fitted_ranges_have_equal_scale_and_cover_the_data() {
         let p = plot();
@@ -496,15 +509,7 @@ mod tests {
         let mut zero = p.clone();
         zero.x_range = Some((0.0, 1000.0));
         assert!(zero.validate().is_err());
-        p.layers.push(Layer {
-            name: "gate".into(),
-            style: XyStyle::Series(3),
-            kind: LayerKind::Ellipses(vec![ErrorEllipse {
-                centre: [50.0, 5.0],
-                semi_axes: [20.0, 5.0],
-                angle: 0.3,
-            }]),
-        });
+        p.layers.push(gate());
         let err = p.validate().unwrap_err().to_string();
         assert!(err.contains("ellipses"), "{err}");
     }
@@ -514,15 +519,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("pf-viz-xy-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let mut p = plot();
-        p.layers.push(Layer {
-            name: "gate".into(),
-            style: XyStyle::Series(3),
-            kind: LayerKind::Ellipses(vec![ErrorEllipse {
-                centre: [50.0, 5.0],
-                semi_axes: [20.0, 5.0],
-                angle: 0.3,
-            }]),
-        });
+        p.layers.push(gate());
         render(&dir.join("one.png"), &p).unwrap();
         render_grid(&dir.join("grid.png"), "grid", &[p.clone(), p], 2).unwrap();
         for f in ["one.png", "grid.png"] {
