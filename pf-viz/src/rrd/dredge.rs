@@ -72,16 +72,16 @@ fn log(
     let err = rrd_err(path);
     layout::send(rec, &blueprint(), Some(TIME)).map_err(&err)?;
     for (e, n, c) in [
-        ("volume/measured", "V_t measured (m³)", GREY),
-        ("volume/true", "V_t simulated (m³)", BLUE),
-        ("mass/measured", "m_t measured (kg)", GREY),
-        ("mass/true", "m_t simulated (kg)", BLUE),
-        ("Q/Q_i", "Q_i (m³/s)", GREEN),
-        ("Q/Q_o_true", "Q_o simulated (m³/s)", BLUE),
-        ("Q/Q_o_pf", "Q_o PF estimate (m³/s)", RED),
-        ("rho/rho_i", "ρ_i (kg/m³)", GREEN),
-        ("rho/rho_o_true", "ρ_o simulated (kg/m³)", BLUE),
-        ("rho/rho_o_pf", "ρ_o PF estimate (kg/m³)", RED),
+        ("volume/measured", "Vₜ measured (m³)", GREY),
+        ("volume/true", "Vₜ simulated (m³)", BLUE),
+        ("mass/measured", "mₜ measured (kg)", GREY),
+        ("mass/true", "mₜ simulated (kg)", BLUE),
+        ("Q/Q_i", "Qᵢ (m³/s)", GREEN),
+        ("Q/Q_o_true", "Qₒ simulated (m³/s)", BLUE),
+        ("Q/Q_o_pf", "Qₒ PF estimate (m³/s)", RED),
+        ("rho/rho_i", "ρᵢ (kg/m³)", GREEN),
+        ("rho/rho_o_true", "ρₒ simulated (kg/m³)", BLUE),
+        ("rho/rho_o_pf", "ρₒ PF estimate (kg/m³)", RED),
     ] {
         series(rec, path, e, n, c)?;
     }
@@ -89,7 +89,7 @@ fn log(
     rec.log_static(
         format!("{ROOT}/cloud/axes/q"),
         &Points2D::new(q_ticks.iter().map(|&q| at(q, Q_TICKS_AT)))
-            .with_labels(q_ticks.iter().map(|q| format!("Q_o {q}")))
+            .with_labels(q_ticks.iter().map(|q| format!("Qₒ {q}")))
             .with_colors([GREY])
             .with_radii([Radius::new_ui_points(2.0)])
             .with_show_labels(true),
@@ -98,7 +98,7 @@ fn log(
     rec.log_static(
         format!("{ROOT}/cloud/axes/rho"),
         &Points2D::new(rho_ticks.iter().map(|&r| at(RHO_TICKS_AT, r)))
-            .with_labels(rho_ticks.iter().map(|r| format!("ρ_o {r}")))
+            .with_labels(rho_ticks.iter().map(|r| format!("ρₒ {r}")))
             .with_colors([GREY])
             .with_radii([Radius::new_ui_points(2.0)])
             .with_show_labels(true),
@@ -189,14 +189,14 @@ fn blueprint() -> Node {
     let frame = corners.into_iter().chain([at(RHO_TICKS_AT, Q_TICKS_AT)]);
     layout::horizontal([
         layout::vertical([
-            signal("hopper volume V_t (m³)", "volume"),
-            signal("hopper mass m_t (kg)", "mass"),
-            signal("flow-rates Q_i, Q_o (m³/s)", "Q"),
-            signal("densities ρ_i, ρ_o (kg/m³)", "rho"),
+            signal("hopper volume Vₜ (m³)", "volume"),
+            signal("hopper mass mₜ (kg)", "mass"),
+            signal("flow-rates Qᵢ, Qₒ (m³/s)", "Q"),
+            signal("densities ρᵢ, ρₒ (kg/m³)", "rho"),
         ]),
         layout::vertical([
             View::spatial_2d(
-                "particle cloud: x = Q_o × 100 (m³/s), y = −ρ_o (kg/m³)",
+                "particle cloud: x = Qₒ × 100 (m³/s), y = −ρₒ (kg/m³)",
                 format!("{ROOT}/cloud"),
             )
             .with_bounds(Bounds::around(frame, 0.08))
@@ -204,7 +204,7 @@ fn blueprint() -> Node {
             // The same cloud without the axes, which the viewer then frames on the cloud: in
             // the whole plane it spans a few pixels.
             View::spatial_2d(
-                "the cloud close up, framed on it (same x = Q_o × 100, y = −ρ_o)",
+                "the cloud close up, framed on it (same x = Qₒ × 100, y = −ρₒ)",
                 format!("{ROOT}/cloud"),
             )
             .with_contents(
