@@ -22,6 +22,55 @@ pub fn check_count(what: &'static str, n: usize) -> Result<usize> {
     Ok(n)
 }
 
+/// `len` elements taking `bytes` in all, or [`CoreError::TooLarge`] naming `what` when that
+/// is more memory than this machine has: its RAM and swap, or its cgroup's limit where that
+/// is lower (Linux; elsewhere nothing is checked).
+///
+/// Linux overcommits memory: a request beyond what the machine has is often granted, and the
+/// process is killed, with no message, when it first touches the pages. So a caller that
+/// allocates several buffers checks their total here before it maps any of them, and every
+/// allocation in this module checks its own size.
+///
+/// # Errors
+/// `bytes` exceeds the machine's memory.
+pub fn check_memory(what: &'static str, len: usize, bytes: usize) -> Result<()> {
+    match machine_memory() {
+        Some(limit) if bytes > limit => Err(CoreError::TooLarge { what, len }),
+        _ => Ok(()),
+    }
+}
+
+/// The bytes this process could ever be given, read once: `MemTotal + SwapTotal` from
+/// `/proc/meminfo`, capped by cgroup v2's `memory.max` (plus `memory.swap.max` where that
+/// is a number). `None` where neither can be read.
+fn machine_memory() -> Option<usize> {
+    static MEMORY: std::sync::OnceLock<Option<usize>> = std::sync::OnceLock::new();
+    *MEMORY.get_or_init(|| {
+        let read = |path: &str| std::fs::read_to_string(path).ok();
+        let meminfo = read("/proc/meminfo").and_then(|text| {
+            let kib = |key: &str| -> Option<usize> {
+                let line = text.lines().find(|l| l.starts_with(key))?;
+                line[key.len()..]
+                    .trim()
+                    .trim_end_matches("kB")
+                    .trim()
+                    .parse()
+                    .ok()
+            };
+            let total = kib("MemTotal:")?.checked_add(kib("SwapTotal:").unwrap_or(0))?;
+            total.checked_mul(1024)
+        });
+        // "max" (no limit) or a byte count; swap counts only where the cgroup caps RAM.
+        let limit = |path: &str| read(path).and_then(|t| t.trim().parse::<usize>().ok());
+        let cgroup = limit("/sys/fs/cgroup/memory.max")
+            .map(|ram| ram.saturating_add(limit("/sys/fs/cgroup/memory.swap.max").unwrap_or(0)));
+        match (meminfo, cgroup) {
+            (Some(m), Some(c)) => Some(m.min(c)),
+            (m, c) => m.or(c),
+        }
+    })
+}
+
 /// `n` copies of `value`, or [`CoreError::TooLarge`] when the allocator refuses them.
 ///
 /// # Errors
@@ -32,12 +81,13 @@ pub fn try_filled<T: Clone>(what: &'static str, n: usize, value: T) -> Result<Ve
     Ok(v)
 }
 
-/// An empty vector with room for `n`, or [`CoreError::TooLarge`] when the allocator
-/// refuses it.
+/// An empty vector with room for `n`, or [`CoreError::TooLarge`] when that is more than the
+/// machine's memory ([`check_memory`]) or the allocator refuses it.
 ///
 /// # Errors
-/// The allocation failed.
+/// The allocation failed, or would exceed the machine's memory.
 pub fn try_with_capacity<T>(what: &'static str, n: usize) -> Result<Vec<T>> {
+    check_memory(what, n, n.saturating_mul(size_of::<T>()))?;
     let mut v = Vec::new();
     v.try_reserve_exact(n)
         .map_err(|_| CoreError::TooLarge { what, len: n })?;
@@ -61,5 +111,25 @@ mod tests {
             Err(CoreError::TooLarge { len, .. }) if len == usize::MAX / 2
         ));
         assert_eq!(try_filled("w", 3, 1.5), Ok(vec![1.5; 3]));
+    }
+
+    /// On Linux the machine's memory is known, lies between 64 MiB and 2⁶⁰ bytes, and
+    /// bounds what is accepted; a request of a few bytes always passes.
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn requests_beyond_the_machines_memory_are_refused() {
+        let limit = machine_memory().expect("/proc/meminfo is readable");
+        assert!(limit > 64 << 20 && limit < 1 << 60, "{limit}");
+        assert_eq!(check_memory("x", 1, 8), Ok(()));
+        assert_eq!(check_memory("x", 1, limit), Ok(()));
+        assert_eq!(
+            check_memory("x", 7, limit + 1),
+            Err(CoreError::TooLarge { what: "x", len: 7 })
+        );
+        // A vector the address space could map but the machine could not hold.
+        assert!(matches!(
+            try_with_capacity::<u8>("bytes", limit + 1),
+            Err(CoreError::TooLarge { what: "bytes", .. })
+        ));
     }
 }

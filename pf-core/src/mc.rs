@@ -97,10 +97,24 @@ where
     T: Send,
     F: Fn(usize, &mut PfRng) -> T + Sync,
 {
+    let mut out = Vec::new();
+    replicate_into(seed, n, par, f, &mut out);
+    out
+}
+
+/// [`replicate`] into `out`, which is cleared first and keeps its capacity.
+fn replicate_into<T, F>(seed: u64, n: usize, par: Par, f: F, out: &mut Vec<T>)
+where
+    T: Send,
+    F: Fn(usize, &mut PfRng) -> T + Sync,
+{
     let run = |r: usize| f(r, &mut stream_rng(seed, r as u64));
     match par {
-        Par::Seq => (0..n).map(run).collect(),
-        Par::Rayon => (0..n).into_par_iter().map(run).collect(),
+        Par::Seq => {
+            out.clear();
+            out.extend((0..n).map(run));
+        }
+        Par::Rayon => (0..n).into_par_iter().map(run).collect_into_vec(out),
     }
 }
 
@@ -116,8 +130,17 @@ where
     E: Send + From<crate::CoreError>,
     F: Fn(usize, &mut PfRng) -> Result<T, E> + Sync,
 {
-    crate::limits::check_count("the number of replications", n)?;
-    replicate(seed, n, par, f).into_iter().collect()
+    const WHAT: &str = "the number of replications";
+    crate::limits::check_count(WHAT, n)?;
+    // Both result vectors reserved before the first replication runs, so that a count the
+    // machine cannot hold is an error rather than an aborted allocation.
+    let mut all: Vec<Result<T, E>> = crate::limits::try_with_capacity(WHAT, n)?;
+    let mut ok: Vec<T> = crate::limits::try_with_capacity(WHAT, n)?;
+    replicate_into(seed, n, par, f, &mut all);
+    for result in all {
+        ok.push(result?);
+    }
+    Ok(ok)
 }
 
 /// Sample mean and standard error `σ̂/√R` of replicated values.
@@ -191,5 +214,14 @@ mod tests {
         // A count no machine could hold is refused before anything runs.
         let r = try_replicate(0, usize::MAX, Par::Rayon, fail_from_3);
         assert!(matches!(r, Err(CoreError::TooLarge { .. })), "{r:?}");
+        // So is a count within the limit whose results would not fit (2³² results of
+        // 4 KiB, 16 TiB), before any replication runs.
+        let ran = std::sync::atomic::AtomicBool::new(false);
+        let r = try_replicate(0, crate::limits::MAX_COUNT, Par::Rayon, |_, _| {
+            ran.store(true, std::sync::atomic::Ordering::Relaxed);
+            Ok::<_, CoreError>([0u8; 4096])
+        });
+        assert!(matches!(r, Err(CoreError::TooLarge { .. })));
+        assert!(!ran.into_inner());
     }
 }

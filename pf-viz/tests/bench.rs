@@ -208,3 +208,40 @@ fn absurd_sizes_are_one_line_errors() {
         );
     }
 }
+
+/// Counts within the limit whose buffers or results exceed the machine's memory are one-line
+/// errors too, before anything is allocated: Linux would grant the particle arrays and kill
+/// the process at its first write, and abort on a billion replications' results.
+#[test]
+#[cfg(target_os = "linux")]
+fn counts_beyond_the_machines_memory_are_one_line_errors() {
+    let cases: [&[&str]; 4] = [
+        &[
+            "bench",
+            "bootstrap",
+            "--particles",
+            "4000000000",
+            "--steps",
+            "5",
+        ],
+        &[
+            "homotopy",
+            "rmse",
+            "--realisations",
+            "4000000000",
+            "--particles",
+            "10",
+        ],
+        &["mpf", "table2", "--scale", "quick", "--mc", "4000000000"],
+        &["mpf", "table3", "--scale", "quick", "--mc", "4000000000"],
+    ];
+    for args in cases {
+        let o = pf_viz(args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        one_line_error(
+            &o,
+            &format!("{args:?}"),
+            &["more than this machine can hold"],
+        );
+    }
+}

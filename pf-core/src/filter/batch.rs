@@ -36,7 +36,7 @@
 use super::{ResamplePolicy, RunSummary, StepReport};
 use crate::buffer::ParticleBuf;
 use crate::error::{CoreError, Result};
-use crate::limits::check_count;
+use crate::limits::{PARTICLE_BUFFERS, check_count, check_memory};
 use crate::mc::{Par, PfRng, stream_rng};
 use crate::resample::{
     BLOCK, BlockPlan, Blocked, ChunkSplit, ChunkedWeights, Resampler, SCAN, chunks_per_block,
@@ -293,6 +293,9 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         }
         cfg.policy.validate()?;
         let n = check_count("the number of particles N", cfg.n_particles)?;
+        // Seven arrays of f64 and the ancestors, all of them before any is mapped.
+        let per_particle = 7 * size_of::<f64>() + size_of::<usize>();
+        check_memory(PARTICLE_BUFFERS, n, n.saturating_mul(per_particle))?;
         let chunks = n.div_ceil(cfg.chunk);
         let mut f = BatchBootstrap {
             model,
@@ -1134,6 +1137,17 @@ mod tests {
         assert!(matches!(
             BatchBootstrap::new(m, BatchConfig::new(usize::MAX, 0)),
             Err(CoreError::TooLarge { .. })
+        ));
+        // So is one within the count limit whose arrays (2³² particles, 256 GiB) exceed the
+        // machine's memory: an error before anything is mapped, where Linux would grant the
+        // mappings and kill the process at its first write.
+        #[cfg(target_os = "linux")]
+        assert!(matches!(
+            BatchBootstrap::new(m, BatchConfig::new(crate::limits::MAX_COUNT, 0)),
+            Err(CoreError::TooLarge {
+                what: PARTICLE_BUFFERS,
+                ..
+            })
         ));
         let mut f = BatchBootstrap::new(m, BatchConfig::new(10, 0)).unwrap();
         assert!(f.run(&[]).is_err());

@@ -2,7 +2,9 @@
 
 use super::{Bootstrap, Mutation, ResamplePolicy, RunSummary, StepAt, StepReport};
 use crate::error::{CoreError, Result};
-use crate::limits::{PARTICLE_BUFFERS as PARTICLES, check_count, try_filled, try_with_capacity};
+use crate::limits::{
+    PARTICLE_BUFFERS as PARTICLES, check_count, check_memory, try_filled, try_with_capacity,
+};
 use crate::model::{EuclideanState, StateSpaceModel};
 use crate::observe::{Observer, StepView};
 use crate::particles;
@@ -96,6 +98,10 @@ impl<M: StateSpaceModel, P: Mutation<M>, Rs: Resample> ParticleFilter<M, P, Rs> 
     pub fn new(model: M, mutation: P, resampler: Rs, config: FilterConfig) -> Result<Self> {
         config.validate()?;
         let n = config.n_particles;
+        // Two arrays of states, four of weights and two of ancestors, before any is taken.
+        let per_particle =
+            2 * size_of::<M::State>() + 4 * size_of::<f64>() + 2 * size_of::<usize>();
+        check_memory(PARTICLES, n, n.saturating_mul(per_particle))?;
         Ok(ParticleFilter {
             model,
             mutation,
@@ -376,7 +382,12 @@ mod tests {
 
     #[test]
     fn particle_counts_no_machine_can_hold_are_errors() {
-        for n in [usize::MAX, crate::limits::MAX_COUNT + 1] {
+        // The last is within the count limit, but its buffers (2³² particles, 256 GiB) are
+        // beyond the machine's memory.
+        let counts = [usize::MAX, crate::limits::MAX_COUNT + 1];
+        #[cfg(target_os = "linux")]
+        let counts = [counts[0], counts[1], crate::limits::MAX_COUNT];
+        for n in counts {
             assert!(matches!(
                 ParticleFilter::bootstrap(ar1(), FilterConfig::new(n)).map(|_| ()),
                 Err(CoreError::TooLarge { .. })

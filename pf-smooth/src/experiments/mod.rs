@@ -153,8 +153,12 @@ impl SemExperiment {
         let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
         at_least_one("particles", self.particles)?;
         at_least_one("chains", self.chains)?;
-        // Named here: the replication runner would call them "replications".
-        pf_core::limits::check_count("the number of SEM chains", self.chains)?;
+        // Named here: the replication runner would call them "replications". Its first
+        // reservation, one result per chain, is checked against the machine's memory too.
+        const CHAINS: &str = "the number of SEM chains";
+        pf_core::limits::check_count(CHAINS, self.chains)?;
+        let per_chain = size_of::<Result<Vec<Theta>>>();
+        pf_core::limits::check_memory(CHAINS, self.chains, self.chains.saturating_mul(per_chain))?;
         Ok(theta)
     }
 }
@@ -367,19 +371,27 @@ pub fn lag_sweep(y: &[f64], cfg: &LagSweep) -> Result<LagSweepResult> {
 mod tests {
     use super::*;
 
-    /// Too many chains are refused by name, before any chain runs.
+    /// Too many chains are refused by name, before any chain runs: more than the count
+    /// limit, and (on Linux, where the machine's memory is known) fewer whose results would
+    /// not fit in it.
     #[test]
     fn too_many_sem_chains_are_named_as_chains() {
-        let cfg = SemExperiment {
-            phi: 0.9,
-            sigma: 0.5,
-            rho: 1.0,
-            particles: 10,
-            iterations: 1,
-            chains: usize::MAX,
-            seed: 1,
-        };
-        let e = sem(&[0.1, 0.2, 0.3], &cfg).unwrap_err().to_string();
-        assert!(e.contains("SEM chains"), "{e}");
+        let mut counts = vec![usize::MAX];
+        if cfg!(target_os = "linux") {
+            counts.push(pf_core::limits::MAX_COUNT);
+        }
+        for chains in counts {
+            let cfg = SemExperiment {
+                phi: 0.9,
+                sigma: 0.5,
+                rho: 1.0,
+                particles: 10,
+                iterations: 1,
+                chains,
+                seed: 1,
+            };
+            let e = sem(&[0.1, 0.2, 0.3], &cfg).unwrap_err().to_string();
+            assert!(e.contains("SEM chains"), "{chains}: {e}");
+        }
     }
 }
