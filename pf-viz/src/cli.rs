@@ -141,7 +141,8 @@ pub struct ReportArgs {
     /// `default` (the standard report) or `full` (the papers' own replication counts).
     #[arg(long, value_name = "SCALE", default_value = "default")]
     pub scale: pf_core::mc::Scale,
-    /// Run only these sections (comma-separated), e.g. `smooth,epf`.
+    /// Run only these sections (comma-separated): `core` (the engine's genealogy),
+    /// `smooth`, `mpf`, `homotopy`, `dredge`, `epf`; e.g. `smooth,epf`.
     #[arg(long, value_name = "SECTIONS", value_delimiter = ',')]
     pub only: Vec<String>,
     /// Worker threads for Monte Carlo replications, 1 to 1024 (default: all cores).

@@ -270,7 +270,17 @@ pub fn prepare_out_dir(dir: &Path) -> Result<()> {
         path: dir.to_owned(),
         source,
     };
-    fs::create_dir_all(dir).map_err(out_dir)?;
+    fs::create_dir_all(dir).map_err(|e| {
+        // `create_dir_all` says "File exists" for a file (or a device) in the way.
+        if dir.exists() && !dir.is_dir() {
+            out_dir(std::io::Error::new(
+                std::io::ErrorKind::NotADirectory,
+                "it exists and is not a directory",
+            ))
+        } else {
+            out_dir(e)
+        }
+    })?;
     let probe = temp_path(&dir.join("pf-viz-probe"), false);
     let mut guard = TempGuard::new(probe.clone());
     OpenOptions::new()

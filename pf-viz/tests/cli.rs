@@ -172,6 +172,11 @@ fn unwritable_out_fails_with_one_line_and_leaves_nothing() {
     assert!(stderr.starts_with("error: "), "{stderr:?}");
     assert_eq!(names(s.dir()), vec!["plain-file"], "nothing created");
     assert_eq!(fs::read(&file).unwrap(), b"not a directory");
+    // A file as the output directory itself is named as such, not "File exists".
+    let o = pf_viz(&["report", "--out", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    one_line_error(&o, "file as --out", &["plain-file", "not a directory"]);
+    assert_eq!(fs::read(&file).unwrap(), b"not a directory");
 }
 
 #[test]
@@ -202,6 +207,19 @@ fn bad_arguments_are_rejected() {
         one_line_error(&pf_viz(args), &format!("{args:?}"), &[needle]);
     }
     assert!(!Path::new("x").exists(), "no output for rejected arguments");
+}
+
+/// `report --help` names every section that `--only` accepts.
+#[test]
+fn report_help_names_every_section() {
+    let help = String::from_utf8(pf_viz_ok(&["report", "--help"]).stdout).unwrap();
+    for s in pf_viz::report::SECTIONS {
+        assert!(
+            help.contains(&format!("`{}`", s.name)),
+            "{}: {help}",
+            s.name
+        );
+    }
 }
 
 /// `--jobs` beyond the documented limit (1024) is a one-line usage error before the output
