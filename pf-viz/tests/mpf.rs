@@ -111,7 +111,11 @@ fn bad_input_gets_one_line_and_a_failure() {
             &["mpf", "advise", "--p", "0", "--k", "4", "--particles", "10"][..],
             "p = 0",
         ),
-        (&["mpf", "advise", "--p", "2", "--k", "4"][..], "--budget-s"),
+        // Neither size: the one line names both ways of giving one.
+        (
+            &["mpf", "advise", "--p", "2", "--k", "4"][..],
+            "<--budget-s <F>|--particles <N>>",
+        ),
         (
             &[
                 "mpf",

@@ -80,8 +80,9 @@ pub enum CtArg {
     Nonzero,
 }
 
-/// Arguments of `pf-viz mpf advise`.
+/// Arguments of `pf-viz mpf advise`: exactly one of `--budget-s` and `--particles`.
 #[derive(Debug, Clone, Args)]
+#[command(group(clap::ArgGroup::new("size").required(true).args(["budget_s", "particles"])))]
 pub struct AdviseArgs {
     /// States that must stay in the PF (the nonlinear ones).
     #[arg(long, value_name = "P")]
@@ -90,12 +91,7 @@ pub struct AdviseArgs {
     #[arg(long, value_name = "K")]
     pub k: usize,
     /// Time budget per filter step, seconds: rank by the particles each partition affords.
-    #[arg(
-        long,
-        value_name = "F",
-        conflicts_with = "particles",
-        required_unless_present = "particles"
-    )]
+    #[arg(long, value_name = "F")]
     pub budget_s: Option<f64>,
     /// Particle count: rank by predicted time per step.
     #[arg(long, value_name = "N")]
