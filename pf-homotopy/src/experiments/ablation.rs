@@ -86,23 +86,38 @@ pub struct AblationResult {
     pub worst_by_steps: Vec<[Option<f64>; 2]>,
     /// The same per grid.
     pub worst_by_grid: Vec<[Option<f64>; 2]>,
+    /// The standard error of each final RMS error, `[OHF, AOHF]` per λ step count: the
+    /// squared errors' mean's standard error through the square root, `se/(2·RMS)` (the
+    /// delta method), so that settings can be told apart from noise.
+    pub rms_se_by_steps: Vec<[Option<f64>; 2]>,
+    /// The same per grid.
+    pub rms_se_by_grid: Vec<[Option<f64>; 2]>,
     /// The settings that failed, with the first error of each.
     pub failures: Vec<String>,
 }
 
-/// One setting's final errors for OHF and AOHF: RMS and the worst realisation's, each
-/// `None` when that filter failed.
-type Finals = [Option<(f64, f64)>; 2];
+/// One filter's final errors under one setting.
+#[derive(Debug, Clone, Copy)]
+struct Final {
+    rms: f64,
+    rms_se: f64,
+    worst: f64,
+}
 
-/// Final RMS and worst errors of OHF and AOHF under `cfg`, each `None` (and the error
-/// recorded in `failures`) when that filter fails on some realisation.
-fn final_rmse(cfg: &RmseConfig, setting: &str, failures: &mut Vec<String>) -> Finals {
+/// Final errors of OHF and AOHF under `cfg`, each `None` (and the error recorded in
+/// `failures`) when that filter fails on some realisation.
+fn finals(cfg: &RmseConfig, setting: &str, failures: &mut Vec<String>) -> [Option<Final>; 2] {
     let mut out = [None; 2];
     for (o, alg) in out.iter_mut().zip([Algorithm::Ohf, Algorithm::Aohf]) {
         match final_squared_errors(cfg, &[alg]) {
             Ok(sq) => {
-                let worst = sq[0].iter().copied().fold(0.0, f64::max).sqrt();
-                *o = Some((mean_and_se(&sq[0]).0.sqrt(), worst));
+                let (mean, se) = mean_and_se(&sq[0]);
+                let rms = mean.sqrt();
+                *o = Some(Final {
+                    rms,
+                    rms_se: if rms > 0.0 { se / (2.0 * rms) } else { 0.0 },
+                    worst: sq[0].iter().copied().fold(0.0, f64::max).sqrt(),
+                });
             }
             Err(e) => failures.push(format!("{} with {setting}: {e}", alg.name())),
         }
@@ -110,9 +125,9 @@ fn final_rmse(cfg: &RmseConfig, setting: &str, failures: &mut Vec<String>) -> Fi
     out
 }
 
-/// Split a setting's [`Finals`] into its RMS errors and its worst errors.
-fn split(f: Finals) -> ([Option<f64>; 2], [Option<f64>; 2]) {
-    (f.map(|x| x.map(|(r, _)| r)), f.map(|x| x.map(|(_, w)| w)))
+/// One field of both filters' [`Final`]s.
+fn pick(f: [Option<Final>; 2], field: fn(&Final) -> f64) -> [Option<f64>; 2] {
+    f.map(|x| x.as_ref().map(field))
 }
 
 /// Run both sweeps.
@@ -137,16 +152,20 @@ pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
         aohf_by_grid: Vec::new(),
         worst_by_steps: Vec::new(),
         worst_by_grid: Vec::new(),
+        rms_se_by_steps: Vec::new(),
+        rms_se_by_grid: Vec::new(),
         failures: Vec::new(),
     };
     for &m in &cfg.lambda_steps {
         let mut c = base.clone();
         c.filters.ohf.lambda.steps = m;
         c.filters.aohf.lambda.steps = m;
-        let ([o, a], worst) = split(final_rmse(&c, &format!("{m} λ steps"), &mut res.failures));
+        let f = finals(&c, &format!("{m} λ steps"), &mut res.failures);
+        let [o, a] = pick(f, |f| f.rms);
         res.ohf_by_steps.push(o);
         res.aohf_by_steps.push(a);
-        res.worst_by_steps.push(worst);
+        res.worst_by_steps.push(pick(f, |f| f.worst));
+        res.rms_se_by_steps.push(pick(f, |f| f.rms_se));
     }
     let mut direct = base.clone();
     direct.filters.ohf = OhfConfig::direct();
@@ -156,14 +175,12 @@ pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
         let mut c = base.clone();
         c.filters.grid.n_bearing = nb;
         c.filters.grid.n_range = nr;
-        let ([o, a], worst) = split(final_rmse(
-            &c,
-            &format!("a {nb} × {nr} grid"),
-            &mut res.failures,
-        ));
+        let f = finals(&c, &format!("a {nb} × {nr} grid"), &mut res.failures);
+        let [o, a] = pick(f, |f| f.rms);
         res.ohf_by_grid.push(o);
         res.aohf_by_grid.push(a);
-        res.worst_by_grid.push(worst);
+        res.worst_by_grid.push(pick(f, |f| f.worst));
+        res.rms_se_by_grid.push(pick(f, |f| f.rms_se));
     }
     Ok(res)
 }
@@ -172,8 +189,11 @@ pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
 mod tests {
     use super::*;
 
-    /// Every setting reports a worst final error, and none is below its RMS (the largest of
-    /// a set is at least its root mean square).
+    /// Every setting reports a worst final error and a standard error of its RMS. No worst
+    /// is below its RMS (the largest of a set is at least its root mean square), and no
+    /// standard error above half its RMS: for non-negative squared errors with mean `m` the
+    /// sample variance is at most `R·m²`, so the mean's s.e. is at most `m = RMS²`, and the
+    /// delta method's `se/(2·RMS)` at most `RMS/2`.
     #[test]
     fn worst_errors_cover_every_setting_and_bound_the_rms() {
         let cfg = AblationConfig {
@@ -185,17 +205,39 @@ mod tests {
         let r = ablation(&cfg).unwrap();
         assert_eq!(r.worst_by_steps.len(), 1);
         assert_eq!(r.worst_by_grid.len(), 1);
-        let pairs = [
-            (r.ohf_by_steps[0], r.worst_by_steps[0][0]),
-            (r.aohf_by_steps[0], r.worst_by_steps[0][1]),
-            (r.ohf_by_grid[0], r.worst_by_grid[0][0]),
-            (r.aohf_by_grid[0], r.worst_by_grid[0][1]),
+        assert_eq!(r.rms_se_by_steps.len(), 1);
+        assert_eq!(r.rms_se_by_grid.len(), 1);
+        let triples = [
+            (
+                r.ohf_by_steps[0],
+                r.worst_by_steps[0][0],
+                r.rms_se_by_steps[0][0],
+            ),
+            (
+                r.aohf_by_steps[0],
+                r.worst_by_steps[0][1],
+                r.rms_se_by_steps[0][1],
+            ),
+            (
+                r.ohf_by_grid[0],
+                r.worst_by_grid[0][0],
+                r.rms_se_by_grid[0][0],
+            ),
+            (
+                r.aohf_by_grid[0],
+                r.worst_by_grid[0][1],
+                r.rms_se_by_grid[0][1],
+            ),
         ];
-        for (rms, worst) in pairs {
-            let (rms, worst) = (rms.unwrap(), worst.unwrap());
+        for (rms, worst, se) in triples {
+            let (rms, worst, se) = (rms.unwrap(), worst.unwrap(), se.unwrap());
             assert!(
                 worst >= rms && worst.is_finite(),
                 "worst {worst} < rms {rms}"
+            );
+            assert!(
+                se > 0.0 && se <= 0.5 * rms * (1.0 + 1e-12),
+                "se {se} of rms {rms}"
             );
         }
     }

@@ -20,7 +20,7 @@ use serde::Serialize;
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
 use crate::png;
-use crate::png::line::{LinePlot, RefLine, Series};
+use crate::png::line::{Band, LinePlot, RefLine, Series};
 use crate::png::style::{AxisScale, LegendPos};
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle};
 use pf_core::mc::Scale;
@@ -250,8 +250,8 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             x_scale: AxisScale::Linear,
             y_label: "final RMS position error (m)".into(),
             series: vec![
-                present("OHF", &steps, &abl.ohf_by_steps),
-                present("AOHF", &steps, &abl.aohf_by_steps),
+                ablation_series("OHF", &steps, &abl.ohf_by_steps, &abl.rms_se_by_steps, 0),
+                ablation_series("AOHF", &steps, &abl.aohf_by_steps, &abl.rms_se_by_steps, 1),
             ],
             ref_lines: vec![RefLine {
                 y: abl.ohf_limit,
@@ -270,11 +270,11 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         &LinePlot {
             title: "Ablation: final RMS error against the polar-grid resolution".into(),
             x_label: "grid points n_β · n_r".into(),
-            x_scale: AxisScale::Linear,
+            x_scale: AxisScale::Log10,
             y_label: "final RMS position error (m)".into(),
             series: vec![
-                present("OHF", &grid_pts, &abl.ohf_by_grid),
-                present("AOHF", &grid_pts, &abl.aohf_by_grid),
+                ablation_series("OHF", &grid_pts, &abl.ohf_by_grid, &abl.rms_se_by_grid, 0),
+                ablation_series("AOHF", &grid_pts, &abl.aohf_by_grid, &abl.rms_se_by_grid, 1),
             ],
             ref_lines: vec![],
             y_range: None,
@@ -306,9 +306,12 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             file: file.into(),
             caption: format!(
                 "Beyond the paper: final RMS position error of OHF and AOHF against {what}, \
-                 over {} realisations, everything else at its default. An RMS over so few \
-                 realisations is set by its worst ones; the largest single final error per \
-                 setting, OHF / AOHF: {worst}.",
+                 over {} realisations, everything else at its default; shaded: ± 2 standard \
+                 errors of each RMS (the squared errors' mean's, through the square root), how \
+                 far it may lie from the RMS of many realisations. The settings share their \
+                 realisations, so the steps between them are less noisy than the bands. \
+                 An RMS over so few realisations is set by its worst ones; the largest single \
+                 final error per setting, OHF / AOHF: {worst}.",
                 abl_cfg.realisations
             ),
         });
@@ -447,19 +450,36 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     })
 }
 
-/// A series of the points where the ablation's filter did not fail.
-fn present(name: &str, x: &[f64], y: &[Option<f64>]) -> Series {
-    let (x, y) = x
-        .iter()
-        .zip(y)
-        .filter_map(|(&x, y)| y.map(|y| (x, y)))
-        .unzip();
-    Series {
-        name: name.into(),
-        x,
-        y,
-        band: None,
+/// Filter `f`'s ablation RMS at the settings `x` where it did not fail, with a band of
+/// ± 2 standard errors (stopping at 0).
+fn ablation_series(
+    name: &str,
+    x: &[f64],
+    rms: &[Option<f64>],
+    se: &[[Option<f64>; 2]],
+    f: usize,
+) -> Series {
+    let mut s = Series {
+        name: format!("{name}, ± 2 s.e."),
+        x: Vec::new(),
+        y: Vec::new(),
+        band: Some(Band {
+            lower: Vec::new(),
+            upper: Vec::new(),
+        }),
+    };
+    for ((&x, r), e) in x.iter().zip(rms).zip(se) {
+        let (Some(r), Some(band)) = (r, s.band.as_mut()) else {
+            continue;
+        };
+        // Both are set together, from the same realisations.
+        let e = e[f].unwrap_or(0.0);
+        s.x.push(x);
+        s.y.push(*r);
+        band.lower.push((r - 2.0 * e).max(0.0));
+        band.upper.push(r + 2.0 * e);
     }
+    s
 }
 
 /// The first sample past the initial transient, when the first bearings shrink the
