@@ -25,6 +25,7 @@ use pf_smooth::{Ar1Data, Theta, ThetaSamples};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
+use super::sd;
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
 use crate::png;
@@ -630,11 +631,6 @@ fn sweep_figure(ctx: &Context<'_>, config: &SmoothConfig, sweeps: &[LagSweepResu
         &panels,
         3,
     )
-}
-
-fn sd(v: &[f64]) -> f64 {
-    let (_, se) = pf_core::mc::mean_and_se(v);
-    se * (v.len() as f64).sqrt()
 }
 
 /// Fig. 3's claim in numbers: standard deviations of J2, J3, F2, F3.
