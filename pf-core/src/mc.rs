@@ -151,6 +151,15 @@ pub fn mean_and_se(x: &[f64]) -> (f64, f64) {
     (mean, (var / n).sqrt())
 }
 
+/// Root mean square of replicated errors, from their squares, and its standard error by the
+/// delta method: the squares' mean's standard error through the square root, `se/(2·RMS)`
+/// (0 when the RMS is 0).
+pub fn rms_and_se(squared: &[f64]) -> (f64, f64) {
+    let (mean, se) = mean_and_se(squared);
+    let rms = mean.sqrt();
+    (rms, if rms > 0.0 { se / (2.0 * rms) } else { 0.0 })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -198,6 +207,16 @@ mod tests {
         let seq = replicate(42, 64, Par::Seq, work);
         assert_eq!(one, two);
         assert_eq!(one, seq);
+    }
+
+    /// Errors 3 and 4: RMS √12.5; the squares 9 and 16 have mean 12.5 and standard error
+    /// 3.5, so the delta method gives 3.5/(2√12.5).
+    #[test]
+    fn rms_and_its_standard_error_by_the_delta_method() {
+        let (rms, se) = rms_and_se(&[9.0, 16.0]);
+        assert_eq!(rms, 12.5f64.sqrt());
+        assert!((se - 3.5 / (2.0 * 12.5f64.sqrt())).abs() < 1e-15, "{se}");
+        assert_eq!(rms_and_se(&[0.0, 0.0]), (0.0, 0.0));
     }
 
     #[test]

@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::filters::{Algorithm, FilterSettings};
 use crate::model::ScenarioConfig;
 use crate::ohf::OhfConfig;
-use pf_core::mc::mean_and_se;
+use pf_core::mc::rms_and_se;
 
 /// Settings of the ablation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -111,11 +111,10 @@ fn finals(cfg: &RmseConfig, setting: &str, failures: &mut Vec<String>) -> [Optio
     for (o, alg) in out.iter_mut().zip([Algorithm::Ohf, Algorithm::Aohf]) {
         match final_squared_errors(cfg, &[alg]) {
             Ok(sq) => {
-                let (mean, se) = mean_and_se(&sq[0]);
-                let rms = mean.sqrt();
+                let (rms, rms_se) = rms_and_se(&sq[0]);
                 *o = Some(Final {
                     rms,
-                    rms_se: if rms > 0.0 { se / (2.0 * rms) } else { 0.0 },
+                    rms_se,
                     worst: sq[0].iter().copied().fold(0.0, f64::max).sqrt(),
                 });
             }
@@ -170,7 +169,7 @@ pub fn ablation(cfg: &AblationConfig) -> Result<AblationResult> {
     let mut direct = base.clone();
     direct.filters.ohf = OhfConfig::direct();
     let sq = final_squared_errors(&direct, &[Algorithm::Ohf])?;
-    res.ohf_limit = mean_and_se(&sq[0]).0.sqrt();
+    res.ohf_limit = rms_and_se(&sq[0]).0;
     for &[nb, nr] in &cfg.grids {
         let mut c = base.clone();
         c.filters.grid.n_bearing = nb;

@@ -206,7 +206,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         format!(
             "Table III: PPKKKK reaches the standard PF's velocity RMSE in {share:.0} % of its \
              time; the paper's headline is 14 %. Marginalization lowers the RMSE at equal \
-             N, as the paper reports."
+             time (Table II), as the paper reports."
         ),
         "Table I's rows sum to 4k³ flops where eq. (11) prints 5k³; we implement eq. (11) \
          as printed (a test pins the gap to exactly k³)."

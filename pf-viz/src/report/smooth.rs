@@ -210,10 +210,16 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             file: "smooth-lag-sweep.png".into(),
             caption: format!(
                 "Not in the paper: bias (mean minus exact update) and standard deviation of the \
-                 fixed-lag updates against δ at N = {:?}, n = {}, {} replications; the \
+                 fixed-lag updates against δ at N = {}, n = {}, {} replications; the \
                  standard deviation grows with δ (path degeneracy), the bias shrinks \
                  (forgetting).",
-                c.sweep_particles, c.n, c.sweep_replications
+                c.sweep_particles
+                    .iter()
+                    .map(|n| n.to_string())
+                    .collect::<Vec<_>>()
+                    .join(" and "),
+                c.n,
+                c.sweep_replications
             ),
         },
     ];
@@ -731,8 +737,9 @@ fn notes(r: &SmoothResult) -> Vec<String> {
     if r.genealogy.coalescence_time.is_none() {
         notes.push(
             "Fig. 1: the paper's N = 50 trajectories coalesce; in our run the final particles \
-             have no common ancestor within the steps shown (the paper does not state θ, the \
-             resampler or the steps it shows)."
+             have no common ancestor within the steps shown (the paper's caption refers to \
+             Section 5 for the model and the filter, whose θ and systematic resampling we \
+             use, but does not say which steps it shows)."
                 .into(),
         );
     }
