@@ -206,28 +206,17 @@ mod tests {
         assert_eq!(r.worst_by_grid.len(), 1);
         assert_eq!(r.rms_se_by_steps.len(), 1);
         assert_eq!(r.rms_se_by_grid.len(), 1);
-        let triples = [
-            (
-                r.ohf_by_steps[0],
-                r.worst_by_steps[0][0],
-                r.rms_se_by_steps[0][0],
-            ),
-            (
-                r.aohf_by_steps[0],
-                r.worst_by_steps[0][1],
-                r.rms_se_by_steps[0][1],
-            ),
-            (
-                r.ohf_by_grid[0],
-                r.worst_by_grid[0][0],
-                r.rms_se_by_grid[0][0],
-            ),
-            (
-                r.aohf_by_grid[0],
-                r.worst_by_grid[0][1],
-                r.rms_se_by_grid[0][1],
-            ),
-        ];
+        // Per setting and filter f: (RMS, worst, s.e. of the RMS).
+        let steps = (0..2).map(|f| {
+            let rms = [r.ohf_by_steps[0], r.aohf_by_steps[0]][f];
+            (rms, r.worst_by_steps[0][f], r.rms_se_by_steps[0][f])
+        });
+        let grid = (0..2).map(|f| {
+            let rms = [r.ohf_by_grid[0], r.aohf_by_grid[0]][f];
+            (rms, r.worst_by_grid[0][f], r.rms_se_by_grid[0][f])
+        });
+        let triples: Vec<_> = steps.chain(grid).collect();
+        assert_eq!(triples.len(), 4);
         for (rms, worst, se) in triples {
             let (rms, worst, se) = (rms.unwrap(), worst.unwrap(), se.unwrap());
             assert!(
