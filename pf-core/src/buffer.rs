@@ -3,7 +3,8 @@
 //!
 //! At N = 10⁶ one step of the batch filter streams through four 8 MiB arrays, 8192 pages of
 //! 4 KiB, more than twice the 3072 entries of this machine's (Zen 4) second-level TLB; on
-//! 2 MiB pages they take 16 entries. Against the same filter on ordinary pages (2026-11-25, 08:00–08:10 UTC):
+//! 2 MiB pages they take 16 entries. Against the same filter on ordinary pages
+//! (2026-11-25, 08:00–08:10 UTC):
 //! criterion `batch_ar1/1-thread` at N = 10⁶ faster in five of six interleaved rounds,
 //! about 4 % at the median; the scratch harness faster in six of six (1–10 %), 2–4 % on
 //! two threads, and no change at 10⁷, where memory itself dominates (performance log, "Huge
