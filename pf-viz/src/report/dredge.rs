@@ -278,9 +278,10 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     fig(
         "dredge-fig4-phases.png",
         "Fig. 4. Paper: hopper mass and volume of a real cycle as the overflow height is \
-         manipulated, phase transitions dashed. Ours (phase 2 bracketed): the simulated cycle (true mₜ, Vₜ, and \
-         hₒ); phase 1 fills without overflow, in phase 2 Vₜ levels off once the overflow \
-         carries as much as the pump brings (Qₒ ≈ Qᵢ) while mₜ still rises, in phase 3 the PID on hₒ holds mₜ at m_max while Vₜ falls."
+         manipulated, phase transitions dashed. Ours (phase 2 bracketed): the simulated \
+         cycle (true mₜ, Vₜ, and hₒ); phase 1 fills without overflow, in phase 2 Vₜ levels \
+         off once the overflow carries as much as the pump brings (Qₒ ≈ Qᵢ) while mₜ still \
+         rises, in phase 3 the PID on hₒ holds mₜ at m_max while Vₜ falls."
             .into(),
     );
 
