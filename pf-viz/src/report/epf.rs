@@ -923,9 +923,9 @@ fn notes(scenarios: &[ScenarioResult], report: &mut SectionReport) {
         }
     ));
     report.notes.push(
-        "Ants with heavy clutter (3 per frame, 20 % misses). Counting the failures over 300 \
-         runs (N = 200; `cargo run --release \
-         --example clutter -p pf-epf`): EPF gives a target a clutter detection in 12.4 % of \
+        "Why EPF loses on the ants with heavy clutter (3 per frame, 20 % misses), counting \
+         the failures over 300 runs (N = 200; `cargo run --release --example clutter -p \
+         pf-epf`): EPF gives a target a clutter detection in 12.4 % of \
          target-frames (NNSF 11.6 %) and another ant's in 8.9 % (NNSF 7.7 %), and misses its \
          own less often (14.6 % against 15.7 %). The normalised magnitude E of eq. (1) is \
          relative among the targets (α_l divides by the column sum), so it cannot say that a \
