@@ -805,3 +805,29 @@ fn ellipse_plot(r: &EllipsesResult, g: &ScenarioGeometry) -> XyPlot {
         y_range: None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn finals(ohf: Vec<f64>, aohf: Vec<f64>) -> PerAlgorithm<Vec<f64>> {
+        PerAlgorithm {
+            ohf,
+            aohf,
+            ukf_lpc: vec![],
+            pf: vec![],
+        }
+    }
+
+    /// The verdict names the filter that ends lower and tells a gap beyond the noise from
+    /// one within it: errors 3, 4 (RMS ≈ 3.54) against 30, 40 is beyond; against 3, 5 within.
+    #[test]
+    fn the_ohf_verdict_follows_the_final_errors() {
+        let beyond = ohf_against_aohf(&finals(vec![3.0, 4.0], vec![30.0, 40.0]));
+        assert!(beyond.starts_with("Its OHF is best here too"), "{beyond}");
+        assert!(beyond.contains("beyond"), "{beyond}");
+        let within = ohf_against_aohf(&finals(vec![3.0, 5.0], vec![3.0, 4.0]));
+        assert!(within.contains("is not reproduced"), "{within}");
+        assert!(within.contains("within"), "{within}");
+    }
+}
