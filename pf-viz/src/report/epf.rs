@@ -16,6 +16,7 @@
 
 use pf_core::mc::{Par, stream_rng};
 use pf_core::metrics::{RecCurve, tolerance_grid};
+use pf_epf::data::Detection;
 use pf_epf::experiments::{Comparison, ComparisonConfig, Method, compare, tracker_for};
 use pf_epf::metrics::rec_of;
 use pf_epf::scenario::{Scenario, ScenarioConfig, Simulation, TruthTrack, simulate};
@@ -566,8 +567,7 @@ fn fmt3(x: f64) -> String {
 
 /// Whether each target's smallest E among the detections in its gate is on its own
 /// detection, as in the paper's tables, and where the example run's assignment is wrong.
-fn smallest_e_verdict(sim: &Simulation, t: &EnergyTable) -> String {
-    let rows = sim.detections.rows();
+fn smallest_e_verdict(rows: &[Detection], t: &EnergyTable) -> String {
     let source = |j: usize| rows[t.detections[j]].target;
     let name = |j: usize| source(j).map_or("a clutter detection".into(), |s| format!("M{}", s + 1));
     let (mut right, mut wrong) = (Vec::new(), Vec::new());
@@ -672,7 +672,7 @@ fn energy_table(s: Scenario, sim: &Simulation, t: &EnergyTable) -> Table {
                 Scenario::WalkingMen => "Table 1",
                 Scenario::Ants => "Table 2 (printed there ×100)",
             },
-            smallest_e_verdict(sim, t),
+            smallest_e_verdict(sim.detections.rows(), t),
         ),
         header: [
             "target",
@@ -941,4 +941,78 @@ fn notes(scenarios: &[ScenarioResult], report: &mut SectionReport) {
          only target with a non-zero component. The paper's Table 2 prints values ×100."
             .into(),
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two targets and their detections 0 (of T1) and 1 (of T2), both in both gates, with
+    /// the energies `e` and the assignment `a`.
+    fn table(e: [[f64; 2]; 2], gated: [[bool; 2]; 2], a: [Option<usize>; 2]) -> EnergyTable {
+        let zero = vec![vec![0.0; 2]; 2];
+        EnergyTable {
+            frame: 3,
+            targets: vec![0, 1],
+            detections: vec![0, 1],
+            positions: vec![[0.0; 2]; 2],
+            raw: [zero.clone(), zero.clone(), zero.clone()],
+            weighted: [zero.clone(), zero.clone(), zero],
+            e: e.iter().map(|r| r.to_vec()).collect(),
+            gated: gated.iter().map(|r| r.to_vec()).collect(),
+            assignment: a.to_vec(),
+        }
+    }
+
+    fn rows() -> Vec<Detection> {
+        (0..2)
+            .map(|k| Detection {
+                frame: 3,
+                position: Default::default(),
+                target: Some(k),
+            })
+            .collect()
+    }
+
+    /// The caption's claim follows the energies: true pairs smallest, a wrong smallest
+    /// named with both values, an own detection outside the gate, and wrong assignments.
+    #[test]
+    fn the_smallest_e_claim_follows_the_table() {
+        let all = [[true; 2]; 2];
+        let right = smallest_e_verdict(
+            &rows(),
+            &table([[0.1, 0.9], [0.8, 0.2]], all, [Some(0), Some(1)]),
+        );
+        assert_eq!(
+            right,
+            "among the detections in each target's gate, it is too."
+        );
+        let swapped = smallest_e_verdict(
+            &rows(),
+            &table([[0.1, 0.9], [0.3, 0.5]], all, [Some(0), Some(0)]),
+        );
+        assert!(
+            swapped.contains(
+                "it is for T1, but T2's smallest is on M1 (0.300), not on its own M2 (0.500)"
+            ),
+            "{swapped}"
+        );
+        assert!(
+            swapped.contains("associates wrongly at this frame: T2 ← M1"),
+            "{swapped}"
+        );
+        let outside = smallest_e_verdict(
+            &rows(),
+            &table(
+                [[0.1, 0.9], [0.8, 0.2]],
+                [[true, true], [true, false]],
+                [Some(0), None],
+            ),
+        );
+        assert!(
+            outside.contains("T2's own detection lies outside its gate"),
+            "{outside}"
+        );
+        assert!(!outside.contains("wrongly"), "{outside}");
+    }
 }
