@@ -99,8 +99,7 @@ const WINDOW: usize = 30;
 
 /// The ρₒ residual where the simulated ρₒ has not yet left the water density it starts
 /// phase 3 at: the noise floor, measured on the run itself.
-fn flat_stretch(f56: &ex::Fig56Result) -> String {
-    let (t, truth, hat) = (&f56.t, &f56.rho_o_true, &f56.rho_o_hat);
+fn flat_stretch(t: &[f64], truth: &[f64], hat: &[f64]) -> String {
     let Some(&start) = truth.first() else {
         return "phase 3 is empty in this run".into();
     };
@@ -570,7 +569,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             100.0 * r.relative_std,
             r.signal_range,
             sweep_rho_std(&ns, fig5_6_config.filter.n_particles),
-            flat_stretch(&f56),
+            flat_stretch(&f56.t, &f56.rho_o_true, &f56.rho_o_hat),
             best_lag(&f56.t, &f56.rho_o_true, &f56.rho_o_hat),
         ),
         "Values the paper leaves unstated, chosen physically plausible (crate README lists them \
@@ -632,5 +631,42 @@ mod tests {
         let late: Vec<f64> = (0..200).map(|k| truth[k.max(7) - 7]).collect();
         assert_eq!(best_lag(&t, &truth, &late), 35.0);
         assert_eq!(best_lag(&t, &truth, &truth), 0.0);
+    }
+
+    /// The noise floor is measured on the flat start only: 60 flat samples with residuals
+    /// ±1 (std ≈ 1.008), then a ramp whose large residuals must not count.
+    #[test]
+    fn the_flat_stretch_is_measured_before_the_density_moves() {
+        let t: Vec<f64> = (0..100).map(|k| 5.0 * k as f64).collect();
+        let truth: Vec<f64> = (0..100)
+            .map(|k| {
+                if k < 60 {
+                    1025.0
+                } else {
+                    1025.0 + 10.0 * (k - 59) as f64
+                }
+            })
+            .collect();
+        let hat: Vec<f64> = (0..100)
+            .map(|k| {
+                if k < 60 {
+                    1025.0 + if k % 2 == 0 { 1.0 } else { -1.0 }
+                } else {
+                    1025.0
+                }
+            })
+            .collect();
+        let s = flat_stretch(&t, &truth, &hat);
+        assert!(
+            s.contains("stays at 1025 kg/m³ (0–295 s, 60 % of phase 3)"),
+            "{s}"
+        );
+        assert!(
+            s.contains("residual std is 1.0 kg/m³, and 1.0–1.0 over 30-sample"),
+            "{s}"
+        );
+        // Too short a flat start says so rather than measuring noise on a ramp.
+        let short = flat_stretch(&t[..40], &truth[20..60], &hat[..40]);
+        assert!(short.contains("too soon"), "{short}");
     }
 }
