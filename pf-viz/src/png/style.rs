@@ -360,8 +360,8 @@ impl AxisScale {
 }
 
 /// Draw the shared mesh: light grid, ink axes, short tick labels, axis descriptions. On a
-/// [`AxisScale::Log10`] x axis the chart's x coordinates are logarithms: the ticks sit at whole
-/// decades and show their values.
+/// [`AxisScale::Log10`] x axis the chart's x coordinates are logarithms: the ticks sit at
+/// the whole decades in the range, where it holds any, and show their values.
 ///
 /// # Errors
 /// A plot error naming `path`.
@@ -377,7 +377,8 @@ pub fn draw_mesh(
         AxisScale::Linear => 10,
         AxisScale::Log10 => {
             let r = chart.x_range();
-            (r.end.floor() - r.start.ceil()).max(1.0) as usize + 1
+            // One label per whole decade in the range (plotters then puts them there).
+            (r.end.floor() - r.start.ceil()).max(0.0) as usize + 1
         }
     };
     chart

@@ -603,7 +603,8 @@ fn smallest_e_verdict(rows: &[Detection], t: &EnergyTable) -> String {
             (Some(o), _) if !t.gated[k][o] => {
                 wrong.push(format!("{target}'s own detection lies outside its gate"))
             }
-            (Some(o), Some(b)) if o == b => right.push(target),
+            // A tie with the true pair counts for it.
+            (Some(o), Some(b)) if t.e[k][o] <= t.e[k][b] => right.push(target),
             (Some(o), Some(b)) => wrong.push(format!(
                 "{target}'s smallest is on {} ({:.3}), not on its own M{} ({:.3})",
                 name(b),

@@ -213,11 +213,15 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
                  fixed-lag updates against δ at N = {}, n = {}, {} replications; the \
                  standard deviation grows with δ (path degeneracy), the bias shrinks \
                  (forgetting).",
-                c.sweep_particles
-                    .iter()
-                    .map(|n| n.to_string())
-                    .collect::<Vec<_>>()
-                    .join(" and "),
+                {
+                    let n: Vec<String> = c.sweep_particles.iter().map(|n| n.to_string()).collect();
+                    match n.split_last() {
+                        Some((last, rest)) if !rest.is_empty() => {
+                            format!("{} and {last}", rest.join(", "))
+                        }
+                        _ => n.join(""),
+                    }
+                },
                 c.n,
                 c.sweep_replications
             ),
