@@ -591,15 +591,14 @@ fn sweep_figure(ctx: &Context<'_>, config: &SmoothConfig, sweeps: &[LagSweepResu
                 let np = config.sweep_particles[j];
                 let exact = pick(&s.exact);
                 let mut bias = Vec::new();
-                let mut sd = Vec::new();
+                let mut spread = Vec::new();
                 for (l, samples) in s.fixed_lag.iter().enumerate() {
                     let v = [&samples.phi, &samples.sigma2, &samples.rho2][p];
-                    let (m, se) = pf_core::mc::mean_and_se(v);
                     let x = s.lags[l] as f64;
-                    bias.push([x, m - exact]);
-                    sd.push([x, se * (v.len() as f64).sqrt()]);
+                    bias.push([x, pf_core::mc::mean_and_se(v).0 - exact]);
+                    spread.push([x, sd(v)]);
                 }
-                all.extend(bias.iter().chain(&sd).map(|q| q[1]));
+                all.extend(bias.iter().chain(&spread).map(|q| q[1]));
                 layers.push(Layer {
                     name: format!("bias, N = {np}"),
                     style: XyStyle::Series(2 * j),
@@ -608,7 +607,7 @@ fn sweep_figure(ctx: &Context<'_>, config: &SmoothConfig, sweeps: &[LagSweepResu
                 layers.push(Layer {
                     name: format!("std. dev., N = {np}"),
                     style: XyStyle::Series(2 * j + 1),
-                    kind: LayerKind::Path(sd),
+                    kind: LayerKind::Path(spread),
                 });
             }
             let (lo, hi) = all
