@@ -24,6 +24,10 @@ pub struct NoisyAr1 {
     /// `1/ρ` and `−log ρ − ½ log 2π`, so that the likelihood costs no division or logarithm.
     inv_rho: f64,
     log_norm_g: f64,
+    /// `1/σ` and `−log σ − ½ log 2π`, the same for the transition density (which forward
+    /// smoothing evaluates N² times a step).
+    inv_sigma: f64,
+    log_norm_f: f64,
 }
 
 fn positive(name: &'static str, value: f64) -> Result<f64> {
@@ -84,6 +88,8 @@ impl NoisyAr1 {
             s0: 1.0,
             inv_rho: 1.0 / rho,
             log_norm_g: -rho.ln() - 0.5 * LN_2PI,
+            inv_sigma: 1.0 / sigma,
+            log_norm_f: -sigma.ln() - 0.5 * LN_2PI,
         }
     }
 
@@ -186,8 +192,8 @@ impl StateSpaceModel for NoisyAr1 {
 
 impl TransitionDensity for NoisyAr1 {
     fn log_transition_density(&self, _t: usize, x_prev: &f64, x: &f64, _u: Option<&()>) -> f64 {
-        let e = (x - self.phi * x_prev) / self.sigma;
-        -0.5 * (e * e + LN_2PI) - self.sigma.ln()
+        let e = (x - self.phi * x_prev) * self.inv_sigma;
+        self.log_norm_f - 0.5 * e * e
     }
 }
 

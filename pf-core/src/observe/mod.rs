@@ -56,6 +56,26 @@ impl<S, O: Observer<S> + ?Sized> Observer<S> for &mut O {
     }
 }
 
+/// An observer that may be absent: `None` records nothing, so optional analyses can share
+/// one run (`fixed_lag.as_mut()` in a tuple).
+impl<S, O: Observer<S>> Observer<S> for Option<O> {
+    fn on_start(&mut self, n: usize) {
+        if let Some(o) = self {
+            o.on_start(n)
+        }
+    }
+    fn on_step(&mut self, view: &StepView<'_, S>) {
+        if let Some(o) = self {
+            o.on_step(view)
+        }
+    }
+    fn on_finish(&mut self) {
+        if let Some(o) = self {
+            o.on_finish()
+        }
+    }
+}
+
 macro_rules! tuple_observer {
     ($($name:ident . $idx:tt),+) => {
         impl<S, $($name: Observer<S>),+> Observer<S> for ($($name,)+) {
@@ -108,5 +128,73 @@ impl<S, O: Observer<S>> Observer<S> for Every<O> {
     }
     fn on_finish(&mut self) {
         self.inner.on_finish()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Counts what it is told.
+    #[derive(Default)]
+    struct Count {
+        starts: usize,
+        steps: Vec<usize>,
+        finishes: usize,
+    }
+
+    impl Observer<f64> for Count {
+        fn on_start(&mut self, _n: usize) {
+            self.starts += 1;
+        }
+        fn on_step(&mut self, view: &StepView<'_, f64>) {
+            self.steps.push(view.report.t);
+        }
+        fn on_finish(&mut self) {
+            self.finishes += 1;
+        }
+    }
+
+    fn feed(o: &mut impl Observer<f64>, steps: usize) {
+        let (x, lw, w, a) = ([0.0], [0.0], [1.0], [0]);
+        o.on_start(1);
+        for t in 0..steps {
+            let report = StepReport {
+                t,
+                log_lik_increment: 0.0,
+                log_lik: 0.0,
+                ess: 1.0,
+                resampled: false,
+            };
+            o.on_step(&StepView {
+                report,
+                particles: &x,
+                log_weights: &lw,
+                weights: &w,
+                ancestors: &a,
+            });
+        }
+        o.on_finish();
+    }
+
+    /// `Some` passes every call through, `None` swallows them, and either composes in a
+    /// tuple beside an observer that is always there.
+    #[test]
+    fn optional_observers_pass_through_or_record_nothing() {
+        let (mut always, mut maybe) = (Count::default(), Count::default());
+        let mut absent: Option<Count> = None;
+        feed(&mut (&mut always, Some(&mut maybe), absent.as_mut()), 4);
+        for c in [&always, &maybe] {
+            assert_eq!(
+                (c.starts, c.steps.as_slice(), c.finishes),
+                (1, &[0, 1, 2, 3][..], 1)
+            );
+        }
+        feed(&mut absent, 2);
+        assert!(absent.is_none());
+        let mut every = Every::new(2, Some(Count::default()));
+        feed(&mut every, 5);
+        let inner = every.inner.expect("still there");
+        assert_eq!(inner.steps, [0, 2, 4]);
     }
 }
