@@ -6,6 +6,7 @@
 use crate::ar1::{Ar1Data, Ar1Statistics, SuffStats, Theta};
 use crate::error::{Result, SmoothError, at_least_one};
 use crate::fixed_lag::FixedLag;
+use crate::forward::ForwardSmoothing;
 use crate::path_space::PathSpace;
 use pf_core::filter::{FilterConfig, ParticleFilter, ResamplePolicy};
 use pf_core::resample::Resampler;
@@ -20,6 +21,20 @@ pub enum Estimator {
     Joint,
     /// The fixed-lag estimator with lag δ, eqs. (8)–(9).
     FixedLag(usize),
+    /// Forward-only (FFBSm) smoothing, O(N²) per step (not in the paper; see
+    /// [`forward`](crate::forward)).
+    Forward,
+}
+
+/// The estimates of `τ_{n,1…4}` that one filter run gives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunStatistics {
+    /// The path-space ("joint") estimate, eqs. (6)–(7).
+    pub joint: SuffStats,
+    /// The fixed-lag estimate, if a lag was given.
+    pub fixed_lag: Option<SuffStats>,
+    /// The forward-only smoothing estimate, if asked for.
+    pub forward: Option<SuffStats>,
 }
 
 /// The bootstrap filter of Section 5: `N` particles, systematic resampling at every step.
@@ -43,27 +58,47 @@ pub fn particle_statistics<R: Rng + ?Sized>(
     lag: Option<usize>,
     rng: &mut R,
 ) -> Result<(SuffStats, Option<SuffStats>)> {
+    let run = run_statistics(data, theta, filter, lag, false, rng)?;
+    Ok((run.joint, run.fixed_lag))
+}
+
+/// One run of the bootstrap filter at `θ` on `data`, feeding the joint estimator, the
+/// fixed-lag one if `lag` is given, and forward-only smoothing if `forward` (on the calling
+/// thread: replications are what runs in parallel).
+///
+/// # Errors
+/// Bad `θ`, `N = 0`, `δ = 0`, a filter failure or a non-finite estimate.
+pub fn run_statistics<R: Rng + ?Sized>(
+    data: &Ar1Data,
+    theta: &Theta,
+    filter: FilterConfig,
+    lag: Option<usize>,
+    forward: bool,
+    rng: &mut R,
+) -> Result<RunStatistics> {
     let model = theta.model(data.y()[0])?;
     let stats = Ar1Statistics::new(data);
     let mut pf = ParticleFilter::bootstrap(model, filter)?;
     let ys = data.filter_input();
-    let mut joint = PathSpace::new(stats);
     let n = data.n();
-    match lag {
-        None => {
-            pf.run(&ys, None, rng, &mut joint)?;
-            Ok((SuffStats::from_slice(n, &joint.estimate()?)?, None))
-        }
-        Some(delta) => {
-            // A lag beyond n freezes nothing, so cap it: the cache stays O(N·n) at most.
-            let mut fixed = FixedLag::new(stats, delta.min(n + 1))?;
-            pf.run(&ys, None, rng, &mut (&mut joint, &mut fixed))?;
-            Ok((
-                SuffStats::from_slice(n, &joint.estimate()?)?,
-                Some(SuffStats::from_slice(n, &fixed.estimate()?)?),
-            ))
-        }
-    }
+    let mut joint = PathSpace::new(stats);
+    // A lag beyond n freezes nothing, so cap it: the cache stays O(N·n) at most.
+    let mut fixed = lag
+        .map(|delta| FixedLag::new(stats, delta.min(n + 1)))
+        .transpose()?;
+    let mut smoother = forward.then(|| ForwardSmoothing::new(model, stats));
+    pf.run(
+        &ys,
+        None,
+        rng,
+        &mut (&mut joint, fixed.as_mut(), smoother.as_mut()),
+    )?;
+    let suff = |v: Vec<f64>| SuffStats::from_slice(n, &v);
+    Ok(RunStatistics {
+        joint: suff(joint.estimate()?)?,
+        fixed_lag: fixed.map(|f| f.estimate().and_then(suff)).transpose()?,
+        forward: smoother.map(|f| f.estimate().and_then(suff)).transpose()?,
+    })
 }
 
 /// The statistics estimated by one estimator.
@@ -85,6 +120,11 @@ pub fn estimate_statistics<R: Rng + ?Sized>(
                 what: "fixed-lag estimator",
             })
         }
+        Estimator::Forward => run_statistics(data, theta, filter, None, true, rng)?
+            .forward
+            .ok_or(SmoothError::NoSteps {
+                what: "forward-only smoothing estimator",
+            }),
     }
 }
 

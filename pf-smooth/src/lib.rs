@@ -15,6 +15,7 @@
 //! | eq. (5), the sum functional `s_k` | [`functional`] |
 //! | eqs. (6)–(7), path-space estimator with `γ_k^i` | [`path_space`] |
 //! | eqs. (8)–(9), fixed-lag estimator `τ̂_n^{δ,N}` | [`fixed_lag`] |
+//! | beyond the paper: forward-only (FFBSm) smoothing, the O(N²) reference | [`forward`] |
 //! | Section 5: model, `τ_{n,1…4}`, updates (10)–(12), Fisher's identity | [`ar1`] |
 //! | exact EM / score from the Kalman filter and RTS smoother | [`exact`] |
 //! | SEM (Fig. 4) and Monte Carlo EM | [`em`] |
@@ -55,12 +56,14 @@ pub mod error;
 pub mod exact;
 pub mod experiments;
 pub mod fixed_lag;
+pub mod forward;
 pub mod functional;
 pub mod path_space;
 
 pub use ar1::{Ar1Data, Ar1Statistics, SuffStats, Theta, ThetaSamples};
 pub use error::{Result, SmoothError};
 pub use fixed_lag::FixedLag;
+pub use forward::ForwardSmoothing;
 pub use functional::AdditiveFunctional;
 pub use path_space::PathSpace;
 

@@ -26,6 +26,7 @@ fn args(particles: usize, replications: usize, lag: Option<usize>, seed: u64) ->
         particles,
         replications,
         lag,
+        forward: false,
         seed,
     }
 }

@@ -53,6 +53,35 @@ fn em_keeps_its_json_contract() {
     );
 }
 
+/// `--forward` adds forward-only smoothing from the same particle runs: the joint updates
+/// are those of the run without it, to the last bit (the smoother draws nothing).
+#[test]
+fn em_forward_adds_its_key_and_leaves_the_rest_alone() {
+    let s = Scratch::new("em-forward");
+    let d = data(&s);
+    let mut args = vec!["smooth", "em", "--data", &d];
+    args.extend(THETA);
+    args.extend(["--particles", "20", "--replications", "3", "--lag", "5"]);
+    let without = pf_viz_json(&[args.as_slice(), &["--json"]].concat());
+    assert!(
+        without.get("forward").is_none(),
+        "forward only with --forward"
+    );
+    let with = pf_viz_json(&[args.as_slice(), &["--forward", "--json"]].concat());
+    for k in ["phi", "sigma2", "rho2"] {
+        floats(&with["forward"][k], 3);
+    }
+    for k in ["n", "exact", "joint", "fixed_lag"] {
+        assert_eq!(with[k], without[k], "{k}");
+    }
+    let o = pf_viz(&[args.as_slice(), &["--forward"]].concat());
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(
+        o.status.success() && text.contains("forward-only"),
+        "{text}"
+    );
+}
+
 #[test]
 fn sem_and_score_keep_their_json_contracts() {
     let s = Scratch::new("sem-score");

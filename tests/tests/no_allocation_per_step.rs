@@ -30,7 +30,7 @@ use pf_core::mc::{Par, stream_rng};
 use pf_core::models::NoisyAr1;
 use pf_core::observe::Observer;
 use pf_core::resample::{Resample, Resampler};
-use pf_smooth::{Ar1Data, Ar1Statistics, FixedLag, PathSpace, Theta};
+use pf_smooth::{Ar1Data, Ar1Statistics, FixedLag, ForwardSmoothing, PathSpace, Theta};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -204,11 +204,14 @@ fn smoothers_keep_allocation_out() {
     let mut pf = ParticleFilter::bootstrap(model, FilterConfig::new(300)).expect("valid config");
     let mut joint = PathSpace::new(stats);
     let mut lags = [1, 7, 50].map(|delta| FixedLag::new(stats, delta).expect("valid lag"));
+    // Forward-only smoothing on one thread (on the pool it takes scratch rows per task).
+    let mut forward = ForwardSmoothing::new(model, stats);
     let mut rng = stream_rng(7, 0);
     let mut step = |pf: &mut ParticleFilter<_>, y: &Option<f64>| {
         pf.step(None, y.as_ref(), &mut rng).expect("step runs");
         let view = pf.view().expect("a step was made");
         joint.on_step(&view);
+        forward.on_step(&view);
         for lag in &mut lags {
             lag.on_step(&view);
         }

@@ -9,6 +9,7 @@
 use crate::ar1::{Ar1Data, Ar1Statistics, SuffStats, Theta, ThetaSamples};
 use crate::em::{
     Estimator, ParticleSchedule, StochasticEm, paper_filter_config, particle_statistics,
+    run_statistics,
 };
 use crate::error::{Result, at_least_one};
 use crate::exact::{exact_em, exact_em_step, exact_statistics};
@@ -35,6 +36,10 @@ pub struct EmExperiment {
     pub replications: usize,
     /// Lag δ of the fixed-lag estimator, if wanted.
     pub lag: Option<usize>,
+    /// Whether to add forward-only smoothing (not in the paper; O(N²) per step) from the
+    /// same particle runs.
+    #[serde(default)]
+    pub forward: bool,
     /// Seed; replication r uses stream (seed, r).
     pub seed: u64,
 }
@@ -49,6 +54,7 @@ impl Default for EmExperiment {
             particles: 100,
             replications: 100,
             lag: Some(20),
+            forward: false,
             seed: 0,
         }
     }
@@ -70,7 +76,7 @@ impl EmExperiment {
     }
 }
 
-/// Output of `smooth em`: `{"n", "exact", "joint", "fixed_lag"?}`.
+/// Output of `smooth em`: `{"n", "exact", "joint", "fixed_lag"?, "forward"?}`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EmResult {
@@ -83,6 +89,9 @@ pub struct EmResult {
     /// The update with the fixed-lag estimator (same particle runs), only with a lag.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fixed_lag: Option<ThetaSamples>,
+    /// The update with forward-only smoothing (same particle runs), only if asked for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub forward: Option<ThetaSamples>,
 }
 
 /// One EM update (10)–(12) from θ, exact and with R independent particle estimates.
@@ -96,16 +105,26 @@ pub fn em(y: &[f64], cfg: &EmExperiment) -> Result<EmResult> {
     let exact = exact_em_step(&data, &theta)?;
     let filter = paper_filter_config(cfg.particles);
     let reps = try_replicate(cfg.seed, cfg.replications, Par::Rayon, |_, rng| {
-        let (j, f) = particle_statistics(&data, &theta, filter, cfg.lag, rng)?;
-        Ok::<_, crate::SmoothError>((j.m_step()?, f.map(|f| f.m_step()).transpose()?))
+        let run = run_statistics(&data, &theta, filter, cfg.lag, cfg.forward, rng)?;
+        let update = |s: Option<SuffStats>| s.map(|s| s.m_step()).transpose();
+        Ok::<_, crate::SmoothError>((
+            run.joint.m_step()?,
+            update(run.fixed_lag)?,
+            update(run.forward)?,
+        ))
     })?;
     let joint: Vec<Theta> = reps.iter().map(|r| r.0).collect();
-    let fixed: Option<Vec<Theta>> = reps.iter().map(|r| r.1).collect();
+    let samples = |v: Option<Vec<Theta>>| v.map(|v| ThetaSamples::from_thetas(&v));
     Ok(EmResult {
         n: data.n(),
         exact,
         joint: ThetaSamples::from_thetas(&joint),
-        fixed_lag: cfg.lag.and(fixed).map(|f| ThetaSamples::from_thetas(&f)),
+        fixed_lag: samples(cfg.lag.and(reps.iter().map(|r| r.1).collect())),
+        forward: samples(
+            cfg.forward
+                .then(|| reps.iter().map(|r| r.2).collect())
+                .flatten(),
+        ),
     })
 }
 

@@ -3,7 +3,8 @@
 //!
 //! The JSON shapes are the contract of the issue:
 //! ```text
-//! em    -> {"n", "exact": θ, "joint": {"phi": [R], "sigma2": [R], "rho2": [R]}, "fixed_lag"?: same}
+//! em    -> {"n", "exact": θ, "joint": {"phi": [R], "sigma2": [R], "rho2": [R]}, "fixed_lag"?: same,
+//!           "forward"?: same}
 //! sem   -> {"exact": [θ per iteration], "sem": [[θ per iteration] per chain]}
 //! score -> {"exact": ∇ℓ, "particle": {"phi": [R], "sigma2": [R], "rho2": [R]}}
 //! ```
@@ -66,6 +67,10 @@ pub struct EmArgs {
     /// Lag δ of the fixed-lag estimator (eqs. (8)–(9)); adds `fixed_lag` to the output.
     #[arg(long)]
     pub lag: Option<usize>,
+    /// Add forward-only (FFBSm) smoothing from the same particle runs, an O(N²)-per-step
+    /// reference not in the paper; adds `forward` to the output.
+    #[arg(long)]
+    pub forward: bool,
 }
 
 /// `pf-viz smooth sem`.
@@ -126,6 +131,7 @@ pub fn run(cmd: SmoothCommand) -> Result<()> {
                 particles: c.particles,
                 replications: a.replications,
                 lag: a.lag,
+                forward: a.forward,
                 seed: c.seed,
             };
             cfg.validate().map_err(wrap)?;
@@ -142,6 +148,9 @@ pub fn run(cmd: SmoothCommand) -> Result<()> {
             print_samples("joint (6)–(7)", &out.joint)?;
             if let (Some(f), Some(d)) = (&out.fixed_lag, a.lag) {
                 print_samples(&format!("fixed-lag δ = {d}"), f)?;
+            }
+            if let Some(f) = &out.forward {
+                print_samples("forward-only (FFBSm)", f)?;
             }
             Ok(())
         }

@@ -80,6 +80,9 @@ pub struct SmoothConfig {
     pub sweep_particles: Vec<usize>,
     /// Replications of the sweep.
     pub sweep_replications: usize,
+    /// The N of the long Fig. 3 runs that also feed forward-only smoothing (not in the
+    /// paper; O(N²) per step), the spread table's reference without path degeneracy.
+    pub forward_particles: Vec<usize>,
     /// Random stream (under the master seed) of the data.
     pub data_stream: u64,
 }
@@ -109,6 +112,7 @@ impl SmoothConfig {
             sweep_lags,
             sweep_particles: vec![100, 1000],
             sweep_replications,
+            forward_particles: vec![100],
             data_stream: 0,
         }
     }
@@ -283,6 +287,8 @@ pub fn run(ctx: &Context<'_>, config: SmoothConfig) -> Result<SmoothResult> {
         particles: n_particles,
         replications: config.replications,
         lag,
+        // The smoother draws nothing, so the joint and fixed-lag runs stay the same.
+        forward: lag.is_some() && config.forward_particles.contains(&n_particles),
         seed: sub_seed(ctx.seed, tag),
     };
     let short = data.prefix(config.n_short).map_err(wrap)?;
@@ -642,10 +648,15 @@ fn sweep_figure(ctx: &Context<'_>, config: &SmoothConfig, sweeps: &[LagSweepResu
     )
 }
 
-/// Fig. 3's claim in numbers: standard deviations of J2, J3, F2, F3.
+/// Fig. 3's claim in numbers: standard deviations of J2, J3, F2, F3, and of forward-only
+/// smoothing where it ran (FS, not in the paper).
 fn spread_table(r: &SmoothResult) -> Table {
     let mut rows = Vec::new();
     let long: Vec<&UpdateRuns> = r.fig2_long.iter().filter(|u| u.particles >= 100).collect();
+    let forward: Vec<(usize, &ThetaSamples)> = long
+        .iter()
+        .filter_map(|u| u.result.forward.as_ref().map(|f| (u.particles, f)))
+        .collect();
     for (name, which) in [("φ", 0usize), ("σ²", 1), ("ρ²", 2)] {
         let col = |s: &ThetaSamples| [&s.phi, &s.sigma2, &s.rho2][which].clone();
         let mut row = vec![name.to_owned()];
@@ -661,18 +672,30 @@ fn spread_table(r: &SmoothResult) -> Table {
                     .unwrap_or_default(),
             );
         }
+        for (_, f) in &forward {
+            row.push(format!("{:.4}", sd(&col(f))));
+        }
         row.push("F2 ≈ J3".into());
         rows.push(row);
     }
     let mut header = vec!["update".to_owned()];
     header.extend(long.iter().map(|u| format!("J, N={} (sd)", u.particles)));
     header.extend(long.iter().map(|u| format!("F, N={} (sd)", u.particles)));
+    header.extend(forward.iter().map(|(n, _)| format!("FS, N={n} (sd)")));
     header.push("paper".into());
+    let fs = if forward.is_empty() {
+        String::new()
+    } else {
+        " FS: forward-only smoothing (Del Moral, Doucet & Singh 2010; not in the paper), the \
+         FFBSm estimate from the same particle runs, O(N²) per step and free of path \
+         degeneracy."
+            .to_owned()
+    };
     Table {
         id: "spread".into(),
         caption: format!(
             "Standard deviation of the updates over {} replications, n = {}: joint (J) and \
-             fixed-lag δ = {} (F). The paper gives no numbers, only the claim F2 ≈ J3.",
+             fixed-lag δ = {} (F). The paper gives no numbers, only the claim F2 ≈ J3.{fs}",
             r.config.replications, r.config.n, r.config.lag
         ),
         header,
@@ -742,6 +765,7 @@ fn notes(r: &SmoothResult) -> Vec<String> {
             c.replications,
         ));
     }
+    notes.extend(forward_note(&r.fig2_long));
     if r.genealogy.coalescence_time.is_none() {
         notes.push(
             "Fig. 1: the paper's N = 50 trajectories coalesce; in our run the final particles \
@@ -752,4 +776,111 @@ fn notes(r: &SmoothResult) -> Vec<String> {
         );
     }
     notes
+}
+
+/// Forward-only smoothing beside F2 and J3 (not in the paper): its spread, and its mean's
+/// distance from the exact update in standard errors (it is biased by O(1/N), like every
+/// normalised particle estimate, but has no forgetting bias).
+fn forward_note(long: &[UpdateRuns]) -> Option<String> {
+    let runs = long.iter().find(|u| u.result.forward.is_some())?;
+    let f = runs.result.forward.as_ref()?;
+    let exact = runs.result.exact.phi;
+    let (mean, se) = pf_core::mc::mean_and_se(&f.phi);
+    let fixed = runs.result.fixed_lag.as_ref().map(|l| sd(&l.phi));
+    let j3 = long
+        .iter()
+        .find(|u| u.particles == 1000)
+        .map(|u| sd(&u.result.joint.phi));
+    let beside = match (fixed, j3) {
+        (Some(f2), Some(j3)) => format!(" against {f2:.4} for F2 and {j3:.4} for J3"),
+        (Some(f2), None) => format!(" against {f2:.4} for F2"),
+        _ => String::new(),
+    };
+    let off = mean - exact;
+    let mut within = if off.abs() <= 2.0 * se {
+        "within 2 standard errors".to_owned()
+    } else {
+        format!(
+            "{:.1} standard errors away: the O(1/N) bias of every normalised particle estimate",
+            off.abs() / se.max(f64::MIN_POSITIVE)
+        )
+    };
+    let mean_off = |v: &[f64]| pf_core::mc::mean_and_se(v).0 - exact;
+    within.push_str(&format!(
+        " (the joint estimate's mean is {:+.4} off",
+        mean_off(&runs.result.joint.phi)
+    ));
+    if let Some(l) = &runs.result.fixed_lag {
+        within.push_str(&format!(", the fixed-lag one's {:+.4}", mean_off(&l.phi)));
+    }
+    within.push(')');
+    Some(format!(
+        "Forward-only smoothing (not in the paper) at N = {}: sd of φ̂ {:.4}{beside}; its \
+         mean {mean:.4} is {off:+.4} from the exact update {exact:.4}, {within}. It costs N \
+         transition densities per particle and step, so the reference is for judging the \
+         paper's two O(N) estimators, not a replacement for them.",
+        runs.particles,
+        sd(&f.phi),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Updates whose φ̂ are `phi`, with σ̂², ρ̂² fixed.
+    fn samples(phi: &[f64]) -> ThetaSamples {
+        ThetaSamples {
+            phi: phi.to_vec(),
+            sigma2: vec![0.25; phi.len()],
+            rho2: vec![4.0; phi.len()],
+        }
+    }
+
+    fn runs(
+        particles: usize,
+        joint: &[f64],
+        fixed: Option<&[f64]>,
+        forward: Option<&[f64]>,
+    ) -> UpdateRuns {
+        UpdateRuns {
+            particles,
+            result: EmResult {
+                n: 500,
+                exact: Theta {
+                    phi: 0.8,
+                    sigma2: 0.25,
+                    rho2: 4.0,
+                },
+                joint: samples(joint),
+                fixed_lag: fixed.map(samples),
+                forward: forward.map(samples),
+            },
+        }
+    }
+
+    /// The note states the spreads beside F2 and J3, and calls the forward estimate's
+    /// offset from the exact update a bias only beyond 2 standard errors.
+    #[test]
+    fn the_forward_note_judges_the_offset_by_its_standard_error() {
+        assert_eq!(forward_note(&[runs(100, &[0.8, 0.81], None, None)]), None);
+        // Mean 0.801, sd 0.0084, s.e. 0.0042: an offset of 0.001 is within 2 s.e.
+        let near = [0.79, 0.80, 0.81, 0.804];
+        let wide = [0.78, 0.82, 0.76, 0.84];
+        let long = [
+            runs(100, &wide, Some(&wide), Some(&near)),
+            runs(1000, &near, None, None),
+        ];
+        let note = forward_note(&long).expect("a note");
+        assert!(note.contains("within 2 standard errors"), "{note}");
+        assert!(
+            note.contains("against 0.0365 for F2 and 0.0084 for J3"),
+            "{note}"
+        );
+        // All 0.01 low with a tiny spread: far beyond 2 standard errors.
+        let low = [0.789, 0.7891, 0.7889, 0.79];
+        let note = forward_note(&[runs(100, &wide, Some(&wide), Some(&low))]).expect("a note");
+        assert!(note.contains("standard errors away"), "{note}");
+        assert!(note.contains("against 0.0365 for F2;"), "{note}");
+    }
 }
