@@ -81,7 +81,7 @@ impl MpfConfig {
     /// Check that the configuration can run.
     ///
     /// # Errors
-    /// `N = 0`.
+    /// `N = 0`, or `N` above [`MAX_COUNT`](pf_core::limits::MAX_COUNT).
     pub fn validate(&self) -> Result<()> {
         if self.n_particles == 0 {
             return Err(MpfError::InvalidParameter {
@@ -90,6 +90,7 @@ impl MpfConfig {
                 reason: "the number of particles must be at least 1",
             });
         }
+        pf_core::limits::check_count("the number of particles N", self.n_particles)?;
         Ok(())
     }
 }
@@ -178,27 +179,40 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf
         };
         let n = config.n_particles;
         let n_cov = if shared { 1 } else { n };
+        // Every buffer's size, checked against the machine's memory before any is taken, so
+        // that a count it cannot hold is an error rather than an aborted allocation.
+        const WHAT: &str = "the MPF's particle buffers";
+        let per_particle = (7 * P + 4 * K + 2) * size_of::<f64>() + size_of::<usize>();
+        let covariances = 2 * size_of::<SMatrix<f64, K, K>>();
+        let bytes = n
+            .saturating_mul(per_particle)
+            .saturating_add(n_cov.saturating_mul(covariances));
+        pf_core::limits::check_memory(WHAT, n, bytes)?;
+        let zeros = |len: usize| pf_core::limits::try_filled(WHAT, len, 0.0);
+        let covs = || pf_core::limits::try_filled(WHAT, n_cov, SMatrix::zeros());
+        let mut ancestors = pf_core::limits::try_with_capacity(WHAT, n)?;
+        ancestors.extend(0..n);
         Ok(Self {
             model,
             resampler: config.resampler,
             shared,
             n,
-            xp: vec![0.0; P * n],
-            xk: vec![0.0; K * n],
-            pk: vec![SMatrix::zeros(); n_cov],
-            xp_r: vec![0.0; P * n],
-            xk_r: vec![0.0; K * n],
-            pk_r: vec![SMatrix::zeros(); n_cov],
-            t2: vec![0.0; P * n],
-            w_noise: vec![0.0; P * n],
-            t3: vec![0.0; P * n],
-            t4: vec![0.0; P * n],
-            t7: vec![0.0; K * n],
-            t8: vec![0.0; K * n],
-            t9: vec![0.0; P * n],
-            log_w: vec![0.0; n],
-            w: vec![1.0 / n as f64; n],
-            ancestors: (0..n).collect(),
+            xp: zeros(P * n)?,
+            xk: zeros(K * n)?,
+            pk: covs()?,
+            xp_r: zeros(P * n)?,
+            xk_r: zeros(K * n)?,
+            pk_r: covs()?,
+            t2: zeros(P * n)?,
+            w_noise: zeros(P * n)?,
+            t3: zeros(P * n)?,
+            t4: zeros(P * n)?,
+            t7: zeros(K * n)?,
+            t8: zeros(K * n)?,
+            t9: zeros(P * n)?,
+            log_w: zeros(n)?,
+            w: pf_core::limits::try_filled(WHAT, n, 1.0 / n as f64)?,
+            ancestors,
             last: None,
         })
     }

@@ -191,6 +191,17 @@ fn bad_inputs_are_errors() {
     assert!(part.model::<2, 4>(&cfg).is_err());
     let model = part.model::<4, 2>(&cfg).unwrap();
     assert!(Mpf::new(model.clone(), MpfConfig::new(0)).is_err());
+    // Counts no machine holds are errors before anything is allocated: above the count
+    // limit, and (2³¹ particles, about 670 GB of buffers) above this machine's memory.
+    for n in [usize::MAX, 1 << 31] {
+        assert!(
+            matches!(
+                Mpf::new(model.clone(), MpfConfig::new(n)),
+                Err(MpfError::Core(pf_core::CoreError::TooLarge { .. }))
+            ),
+            "N = {n}"
+        );
+    }
     let mut f = Mpf::new(model, MpfConfig::new(10)).unwrap();
     let y = SVector::<f64, 2>::new(f64::NAN, 0.1);
     assert!(matches!(
