@@ -159,6 +159,11 @@ impl ScenarioConfig {
                 needed: 2,
             });
         }
+        // The target's and observer's states and a bearing per instant, about 72 bytes
+        // (more with each filter's estimates): past the limit or the memory, an error here.
+        const WHAT: &str = "K (sampling instants)";
+        let k = pf_core::limits::check_count(WHAT, self.n_samples)?;
+        pf_core::limits::check_memory(WHAT, k, k.saturating_mul(128))?;
         self.prior.validate()
     }
 

@@ -101,13 +101,18 @@ impl Default for LambdaGrid {
 impl LambdaGrid {
     /// Check the grid.
     pub fn validate(&self) -> Result<()> {
+        const WHAT: &str = "m (λ steps)";
         if self.steps == 0 {
             return Err(HomotopyError::InvalidParameter {
-                name: "m (λ steps)",
+                name: WHAT,
                 value: 0.0,
                 reason: "at least one λ step is needed",
             });
         }
+        // The m + 1 nodes are a vector: a count past the limit or the machine's memory is an
+        // error here, not an aborted allocation in `nodes`.
+        pf_core::limits::check_count(WHAT, self.steps)?;
+        pf_core::limits::check_memory(WHAT, self.steps, self.steps.saturating_mul(8))?;
         if let Spacing::Geometric { ratio } = self.spacing
             && !(ratio.is_finite() && ratio > 1.0)
         {

@@ -163,6 +163,12 @@ impl PolarGridConfig {
                 reason: "the range grid needs at least 2 nodes",
             });
         }
+        // Each node holds a point and three weights, about 64 bytes in the plane's 4-D
+        // state: a grid past the count limit or the machine's memory is an error here.
+        const WHAT: &str = "the polar grid's nodes n_β·n_r";
+        let nodes =
+            pf_core::limits::check_count(WHAT, self.n_bearing.saturating_mul(self.n_range))?;
+        pf_core::limits::check_memory(WHAT, nodes, nodes.saturating_mul(64))?;
         check_positive("n_sigma", self.n_sigma)
     }
 }

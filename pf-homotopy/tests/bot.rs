@@ -244,6 +244,28 @@ fn invalid_inputs_are_errors_not_panics() {
         pf_homotopy::experiments::ellipses(&cfg),
         Err(HomotopyError::InvalidParameter { .. })
     ));
+    // Sizes no machine holds are errors before anything is allocated or run: the λ grid,
+    // the polar grid, the number of instants.
+    type Set = fn(&mut pf_homotopy::experiments::EllipsesConfig);
+    let huge: [(&str, Set); 4] = [
+        ("λ steps 2⁴⁰", |c| c.ohf.lambda.steps = 1 << 40),
+        ("λ steps usize::MAX", |c| c.ohf.lambda.steps = usize::MAX),
+        ("n_bearing 2⁴⁰", |c| c.grid.n_bearing = 1 << 40),
+        ("n_samples usize::MAX", |c| {
+            c.scenario.n_samples = usize::MAX
+        }),
+    ];
+    for (what, set) in huge {
+        let mut cfg = pf_homotopy::experiments::EllipsesConfig::default();
+        set(&mut cfg);
+        assert!(
+            matches!(
+                pf_homotopy::experiments::ellipses(&cfg),
+                Err(HomotopyError::Core(pf_core::CoreError::TooLarge { .. }))
+            ),
+            "{what}"
+        );
+    }
     let mut cfg = pf_homotopy::experiments::RmseConfig {
         realisations: 0,
         ..Default::default()
