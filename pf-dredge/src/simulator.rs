@@ -184,11 +184,21 @@ impl SimConfig {
             });
         }
         check_positive("t_end", self.t_end)?;
-        if self.t_end / self.t_s > 1e7 {
+        let samples = self.t_end / self.t_s;
+        if samples > 1e7 {
             return Err(DredgeError::InvalidParameter {
                 name: "t_end",
                 value: self.t_end,
-                reason: "more than 10^7 samples",
+                reason: "more than 10^7 samples (t_end / T_s)",
+            });
+        }
+        // Each sample takes `substeps` Euler steps: bounded too, or a huge count would run
+        // for days instead of failing.
+        if samples * self.substeps as f64 > 1e9 {
+            return Err(DredgeError::InvalidParameter {
+                name: "substeps",
+                value: self.substeps as f64,
+                reason: "more than 10^9 Euler steps in all (t_end / T_s · substeps)",
             });
         }
         check_positive("v_0", self.v_0)?;

@@ -280,6 +280,33 @@ fn small_data() -> DredgeData {
 
 #[test]
 fn bad_inputs_get_their_errors() {
+    // Sizes that would run for days are refused before anything runs: the samples, and the
+    // Euler steps they take in all.
+    for (sim, name) in [
+        (
+            SimConfig {
+                t_s: 1e-300,
+                ..SimConfig::default()
+            },
+            "t_end",
+        ),
+        (
+            SimConfig {
+                t_end: 300.0,
+                substeps: usize::MAX,
+                ..SimConfig::default()
+            },
+            "substeps",
+        ),
+    ] {
+        assert!(
+            matches!(
+                simulate(&sim, 7),
+                Err(DredgeError::InvalidParameter { name: n, .. }) if n == name
+            ),
+            "{name}"
+        );
+    }
     let cfg = EstimateConfig {
         filter: EstimatorConfig::default().with_particles(50),
         ..EstimateConfig::default()
