@@ -19,6 +19,19 @@ pub struct Detection {
     pub target: Option<i64>,
 }
 
+/// The largest frame magnitude, 2⁵³: every frame, and every difference of two, is then an
+/// exact `f64` and an `i64` that cannot overflow.
+const MAX_FRAME: i64 = 1 << 53;
+
+/// `Ok` for a frame within ±[`MAX_FRAME`].
+fn check_frame(file: &'static str, row: usize, frame: i64) -> Result<()> {
+    if (-MAX_FRAME..=MAX_FRAME).contains(&frame) {
+        Ok(())
+    } else {
+        Err(EpfError::FrameOutOfRange { file, row, frame })
+    }
+}
+
 /// Detections in frame order, validated.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Detections {
@@ -26,12 +39,14 @@ pub struct Detections {
 }
 
 impl Detections {
-    /// Validate `rows`: finite coordinates, frames never decreasing.
+    /// Validate `rows`: finite coordinates, frames within ±2⁵³ and never decreasing.
     ///
     /// # Errors
-    /// [`EpfError::NonFiniteData`] or [`EpfError::FrameBackwards`] naming the row.
+    /// [`EpfError::NonFiniteData`], [`EpfError::FrameOutOfRange`] or
+    /// [`EpfError::FrameBackwards`] naming the row.
     pub fn new(rows: Vec<Detection>) -> Result<Self> {
         for (row, d) in rows.iter().enumerate() {
+            check_frame("detections", row, d.frame)?;
             for (what, value) in [("x", d.position.x), ("y", d.position.y)] {
                 if !value.is_finite() {
                     return Err(EpfError::NonFiniteData {
@@ -104,13 +119,14 @@ impl Init {
     /// Group `rows` by target and validate them.
     ///
     /// # Errors
-    /// [`EpfError::NoTargets`]; [`EpfError::NonFiniteData`]; [`EpfError::FrameBackwards`]
-    /// when a target's frames decrease; [`EpfError::DuplicateInitFrame`];
+    /// [`EpfError::NoTargets`]; [`EpfError::NonFiniteData`]; [`EpfError::FrameOutOfRange`];
+    /// [`EpfError::FrameBackwards`] when a target's frames decrease; [`EpfError::DuplicateInitFrame`];
     /// [`EpfError::TooFewInitFrames`] when a target has fewer than the two frames the
     /// energies need (`Â(t−2)` and `Â(t−1)`).
     pub fn new(rows: &[InitRow]) -> Result<Self> {
         let mut targets: Vec<TargetInit> = Vec::new();
         for (row, r) in rows.iter().enumerate() {
+            check_frame("init", row, r.frame)?;
             for (what, value) in [("x", r.position.x), ("y", r.position.y)] {
                 if !value.is_finite() {
                     return Err(EpfError::NonFiniteData {
@@ -252,5 +268,30 @@ mod tests {
             })
         ));
         assert_eq!(Init::new(&[]).unwrap_err(), EpfError::NoTargets);
+    }
+
+    /// Frames beyond ±2⁵³ are refused where they come in: their differences could overflow
+    /// (`i64::MIN` init frames, then a frame 5, did in the tracker) and their `f64` times
+    /// would not be exact. ±2⁵³ itself is accepted.
+    #[test]
+    fn frames_beyond_two_to_the_53_are_errors() {
+        let edge = 1i64 << 53;
+        assert!(Detections::new(vec![det(-edge, 0.0), det(edge, 0.0)]).is_ok());
+        assert_eq!(
+            Detections::new(vec![det(0, 0.0), det(edge + 1, 0.0)]).unwrap_err(),
+            EpfError::FrameOutOfRange {
+                file: "detections",
+                row: 1,
+                frame: edge + 1
+            }
+        );
+        assert_eq!(
+            Init::new(&[row(1, i64::MIN), row(1, i64::MIN + 1)]).unwrap_err(),
+            EpfError::FrameOutOfRange {
+                file: "init",
+                row: 0,
+                frame: i64::MIN
+            }
+        );
     }
 }

@@ -32,6 +32,17 @@ pub enum EpfError {
         /// The offending value.
         value: f64,
     },
+    /// A frame beyond ±2⁵³: frames are times, used in floating point and in differences,
+    /// and are kept where both are exact.
+    #[error("frame {frame} in {file} row {row} is beyond ±2^53")]
+    FrameOutOfRange {
+        /// `"detections"` or `"init"`.
+        file: &'static str,
+        /// Row index (0-based, header excluded).
+        row: usize,
+        /// The offending frame.
+        frame: i64,
+    },
     /// Frames must not decrease from one row to the next.
     #[error("frame goes backwards in {file} row {row}: {frame} after {previous}")]
     FrameBackwards {

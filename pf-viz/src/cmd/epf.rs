@@ -196,9 +196,9 @@ fn parse_int(path: &Path, line: u64, col: &str, s: &str) -> Result<i64> {
 /// An error of the library's validation, mapped to the file and line at fault.
 fn epf_data_err(path: &Path, lines: &[u64], e: EpfError) -> VizError {
     let line = match &e {
-        EpfError::FrameBackwards { row, .. } | EpfError::NonFiniteData { row, .. } => {
-            lines.get(*row).copied()
-        }
+        EpfError::FrameBackwards { row, .. }
+        | EpfError::FrameOutOfRange { row, .. }
+        | EpfError::NonFiniteData { row, .. } => lines.get(*row).copied(),
         _ => None,
     };
     data_err(path, line, e.to_string())
