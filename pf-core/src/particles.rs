@@ -15,13 +15,22 @@ fn dim_of<S: EuclideanState>(x: &[S], w: &[f64]) -> Result<usize> {
             got: w.len(),
         });
     }
-    Ok(first.coords().len())
+    let d = first.coords().len();
+    // States of one type can still differ in length (`Vec<f64>`, `DVector`).
+    if let Some(other) = x.iter().find(|xi| xi.coords().len() != d) {
+        return Err(CoreError::DimensionMismatch {
+            what: "a particle's dimension against the first particle's",
+            expected: d,
+            got: other.coords().len(),
+        });
+    }
+    Ok(d)
 }
 
 /// `Σ_i W_i ξ_i` for normalised weights `W`.
 ///
 /// # Errors
-/// An empty set, or weights of another length.
+/// An empty set, weights of another length, or particles of different dimensions.
 pub fn weighted_mean<S: EuclideanState>(x: &[S], w: &[f64]) -> Result<DVector<f64>> {
     let d = dim_of(x, w)?;
     let mut m = DVector::zeros(d);
@@ -37,7 +46,7 @@ pub fn weighted_mean<S: EuclideanState>(x: &[S], w: &[f64]) -> Result<DVector<f6
 /// small-sample correction, as a filter estimate of the posterior covariance).
 ///
 /// # Errors
-/// An empty set, or weights of another length.
+/// As [`weighted_mean`].
 pub fn weighted_covariance<S: EuclideanState>(x: &[S], w: &[f64]) -> Result<DMatrix<f64>> {
     let m = weighted_mean(x, w)?;
     let d = m.len();
@@ -62,6 +71,19 @@ pub fn weighted_covariance<S: EuclideanState>(x: &[S], w: &[f64]) -> Result<DMat
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Ragged states are an error for both, not an index panic or a mean over the shortest.
+    #[test]
+    fn particles_of_different_dimensions_are_an_error() {
+        let x = vec![vec![1.0, 2.0], vec![1.0]];
+        let mismatch = CoreError::DimensionMismatch {
+            what: "a particle's dimension against the first particle's",
+            expected: 2,
+            got: 1,
+        };
+        assert_eq!(weighted_mean(&x, &[0.5, 0.5]), Err(mismatch.clone()));
+        assert_eq!(weighted_covariance(&x, &[0.5, 0.5]), Err(mismatch));
+    }
 
     #[test]
     fn mean_and_covariance_of_a_known_set() {

@@ -350,7 +350,15 @@ impl<M: ScalarModel> BatchBootstrap<M> {
     }
 
     /// Weighted mean of the current particles.
-    pub fn mean(&self) -> f64 {
+    ///
+    /// # Errors
+    /// [`CoreError::Empty`] before the first step (there are no particles yet).
+    pub fn mean(&self) -> Result<f64> {
+        if self.last.is_none() {
+            return Err(CoreError::Empty {
+                what: "particle set (no step made yet)",
+            });
+        }
         let c = self.cfg.chunk;
         let mut acc = 0.0;
         for ((xs, cws), &scale) in self.x.chunks(c).zip(self.cw.chunks(c)).zip(&self.scale) {
@@ -362,15 +370,16 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             }
             acc += scale * chunk_acc;
         }
-        acc / self.total
+        Ok(acc / self.total)
     }
 
     /// One step; `y = None` is a missing observation.
     ///
     /// # Errors
-    /// All weights zero or a NaN weight at this step; the filter is then left unusable
-    /// until [`reset`](Self::reset) (unlike the generic filter, it does not keep a copy of
-    /// the previous step: that copy would cost a pass over memory every step).
+    /// All weights zero or a NaN weight at this step. The filter then stays at step
+    /// `k − 1`, as the generic one does (a step writes into the second set of buffers and
+    /// swaps them only when it succeeds), but its random streams have moved on: stepping
+    /// again draws other numbers than a fresh run would.
     pub fn step(&mut self, y: Option<f64>) -> Result<StepReport> {
         let n = self.cfg.n_particles;
         let c = self.cfg.chunk;
@@ -952,7 +961,7 @@ mod tests {
                         let s = f.run(&ys).unwrap();
                         let ess: Vec<u64> = s.reports.iter().map(|r| r.ess.to_bits()).collect();
                         let x: Vec<u64> = f.particles().iter().map(|v| v.to_bits()).collect();
-                        (s.log_lik.to_bits(), f.mean().to_bits(), ess, x)
+                        (s.log_lik.to_bits(), f.mean().unwrap().to_bits(), ess, x)
                     })
                 };
                 let off = PREFETCH_MIN;
@@ -1173,6 +1182,34 @@ mod tests {
             f.run(&[None, Some(1.0)]),
             Err(CoreError::AllWeightsZero { t: 1 })
         ));
+    }
+
+    /// No mean before the first step; a failed step leaves the filter at the step before,
+    /// with its particles and mean untouched, and the next step goes on from there.
+    #[test]
+    fn a_failed_step_leaves_the_filter_where_it_was() {
+        let (m, ys) = setup();
+        for resampler in [Resampler::Systematic, Resampler::Residual] {
+            let cfg = BatchConfig {
+                resampler,
+                ..BatchConfig::new(500, 3)
+            };
+            let mut f = BatchBootstrap::new(m, cfg).unwrap();
+            assert!(matches!(f.mean(), Err(CoreError::Empty { .. })));
+            f.step(ys[0]).unwrap();
+            let ok = f.step(ys[1]).unwrap();
+            let (x, mean) = (f.particles().to_vec(), f.mean().unwrap());
+            assert!(matches!(
+                f.step(Some(f64::NAN)),
+                Err(CoreError::NonFiniteWeight { t: 2, .. })
+            ));
+            assert_eq!(f.particles(), x);
+            assert_eq!(f.mean().unwrap().to_bits(), mean.to_bits());
+            assert_eq!(f.log_likelihood(), ok.log_lik);
+            let next = f.step(ys[2]).unwrap();
+            assert_eq!(next.t, 2);
+            assert!(next.log_lik.is_finite() && f.mean().unwrap().is_finite());
+        }
     }
 
     /// A NaN is reported at its own index, in whichever chunk it appears.

@@ -9,7 +9,10 @@ use serde::{Deserialize, Serialize};
 pub struct StepReport {
     /// Time index `k` of the particles `ξ_k` this step produced.
     pub t: usize,
-    /// `log ĉ_k`, the estimate of `log p(y_k | y_{0:k−1})` (0 when `y_k` is missing).
+    /// `log ĉ_k`, the estimate of `log p(y_k | y_{0:k−1})`. When `y_k` is missing it is 0
+    /// for the bootstrap filter; a guided one still weighs by `f/q`
+    /// (`Mutation::reweights_without_observation`), so its increment is the log of an
+    /// unbiased estimate of 1: near 0, not 0.
     pub log_lik_increment: f64,
     /// `Σ_{j≤k} log ĉ_j`: the running log-likelihood estimate (Cappé & Moulines, eq. (3)).
     pub log_lik: f64,

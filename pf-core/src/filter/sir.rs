@@ -156,19 +156,26 @@ impl<M: StateSpaceModel, P: Mutation<M>, Rs: Resample> ParticleFilter<M, P, Rs> 
         &self.x
     }
 
-    /// Current normalised weights `W_k^i`.
+    /// Current normalised weights `W_k^i` (empty before the first step, like the particles).
     pub fn weights(&self) -> &[f64] {
-        &self.w
+        self.current(&self.w)
     }
 
-    /// Current normalised log-weights `log W_k^i`.
+    /// Current normalised log-weights `log W_k^i` (empty before the first step).
     pub fn log_weights(&self) -> &[f64] {
-        &self.log_w
+        self.current(&self.log_w)
     }
 
-    /// `A_k^i` of the last step (the identity at `k = 0` or when it did not resample).
+    /// `A_k^i` of the last step (the identity at `k = 0` or when it did not resample; empty
+    /// before the first step).
     pub fn ancestors(&self) -> &[usize] {
-        &self.ancestors
+        self.current(&self.ancestors)
+    }
+
+    /// `v` once a step has been made, nothing before (or after [`reset`](Self::reset)), so
+    /// that a reset filter shows no leftovers of its last run.
+    fn current<'a, T>(&self, v: &'a [T]) -> &'a [T] {
+        if self.last.is_some() { v } else { &[] }
     }
 
     /// Effective sample size of the current weights.
@@ -482,6 +489,33 @@ mod tests {
             (s, g.into_genealogy())
         };
         assert_eq!(run(), run());
+    }
+
+    /// Before the first step and after a reset the filter shows no particle set at all:
+    /// no weights, log-weights or ancestors left from a run, and no view.
+    #[test]
+    fn a_reset_filter_shows_no_leftovers() {
+        let mut pf = ParticleFilter::bootstrap(ar1(), FilterConfig::new(16)).unwrap();
+        let empty = |pf: &ParticleFilter<NoisyAr1>| {
+            pf.particles().is_empty()
+                && pf.weights().is_empty()
+                && pf.log_weights().is_empty()
+                && pf.ancestors().is_empty()
+                && pf.view().is_none()
+        };
+        assert!(empty(&pf));
+        pf.run(&data(5), None, &mut stream_rng(2, 0), &mut ())
+            .unwrap();
+        assert_eq!(
+            (
+                pf.weights().len(),
+                pf.log_weights().len(),
+                pf.ancestors().len()
+            ),
+            (16, 16, 16)
+        );
+        pf.reset();
+        assert!(empty(&pf));
     }
 
     /// The transition used as a proposal: the guided weights must equal the bootstrap ones.
