@@ -40,7 +40,7 @@
 //! for y in &ys {
 //!     mpf.step(y.as_ref(), &mut rng)?;
 //! }
-//! let (pos, vel) = mpf.estimate(); // x^p = [p_x p_y], x^k = [v_x v_y a_x a_y]
+//! let (pos, vel) = mpf.estimate()?; // x^p = [p_x p_y], x^k = [v_x v_y a_x a_y]
 //! assert!((pos[0] - truth[9][0]).abs() < 100.0 && vel.iter().all(|v| v.is_finite()));
 //! # Ok::<(), pf_mpf::error::MpfError>(())
 //! ```

@@ -288,7 +288,17 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf
 
     /// The filter estimates `x̂^p_{t|t} = Σ q̃_i x^{p,(i)}_t` and
     /// `x̂^k_{t|t} = Σ q̃_i x̂^{k,(i)}_{t|t}`.
-    pub fn estimate(&self) -> (SVector<f64, P>, SVector<f64, K>) {
+    ///
+    /// # Errors
+    /// [`CoreError::Empty`](pf_core::CoreError::Empty) before the first step, when there is
+    /// nothing to estimate from (the buffers hold zeros, not particles).
+    pub fn estimate(&self) -> Result<(SVector<f64, P>, SVector<f64, K>)> {
+        if self.last.is_none() {
+            return Err(pf_core::CoreError::Empty {
+                what: "MPF particle set (no step made yet)",
+            }
+            .into());
+        }
         let mut mp = SVector::<f64, P>::zeros();
         let mut mk = SVector::<f64, K>::zeros();
         for (i, &wi) in self.w.iter().enumerate() {
@@ -299,7 +309,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf
                 mk[d] += wi * self.xk[i * K + d];
             }
         }
-        (mp, mk)
+        Ok((mp, mk))
     }
 
     /// Advance one step: `t = 0` on the first call, then `t + 1`. `y = None` is a missing

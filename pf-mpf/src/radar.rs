@@ -350,7 +350,7 @@ fn run_pk<const P: usize, const K: usize, R: Rng + ?Sized>(
     }
     for (t, y) in ys.iter().enumerate() {
         filter.step(y.as_ref(), rng)?;
-        let (mp, mk) = filter.estimate();
+        let (mp, mk) = filter.estimate()?;
         for (r, &i) in pi.iter().enumerate() {
             est[t][i] = mp[r];
         }

@@ -33,7 +33,7 @@ fn k_zero_is_pf_cores_standard_pf() {
         // Same random numbers in the same order; only the order of floating-point sums
         // differs (faer block products against per-particle products): ~1e-15 relative.
         assert!((a.log_lik - b.log_lik).abs() < 1e-9 * b.log_lik.abs().max(1.0));
-        let (mp, _) = mpf.estimate();
+        let (mp, _) = mpf.estimate().unwrap();
         let m = pf.mean().unwrap();
         for d in 0..6 {
             assert!(
@@ -66,7 +66,7 @@ fn per_particle_riccati_equals_alg1_when_c_is_zero() {
     for y in &ys {
         a.step(y.as_ref(), &mut r1).unwrap();
         b.step(y.as_ref(), &mut r2).unwrap();
-        let ((pa, ka), (pb, kb)) = (a.estimate(), b.estimate());
+        let ((pa, ka), (pb, kb)) = (a.estimate().unwrap(), b.estimate().unwrap());
         // Identical arithmetic up to summation order: relative 1e-9 is ~10⁶ ulps of slack.
         for d in 0..2 {
             assert!((pa[d] - pb[d]).abs() < 1e-9 * pa[d].abs().max(1.0));
@@ -132,7 +132,7 @@ fn marginalising_every_state_reproduces_the_kalman_filter() {
     for (t, y) in ys.iter().enumerate() {
         let y = y.as_ref().map(|y| SVector::<f64, 1>::new(y[0]));
         mpf.step(y.as_ref(), &mut rng).unwrap();
-        let (_, mk) = mpf.estimate();
+        let (_, mk) = mpf.estimate().unwrap();
         for d in 0..2 {
             // Exact algebra in a different order (Joseph form in both): 1e-9 relative.
             assert!(
@@ -203,6 +203,11 @@ fn bad_inputs_are_errors() {
         );
     }
     let mut f = Mpf::new(model, MpfConfig::new(10)).unwrap();
+    // Nothing to estimate before the first step: an error, not the buffers' zeros.
+    assert!(matches!(
+        f.estimate(),
+        Err(MpfError::Core(pf_core::CoreError::Empty { .. }))
+    ));
     let y = SVector::<f64, 2>::new(f64::NAN, 0.1);
     assert!(matches!(
         f.step(Some(&y), &mut stream_rng(0, 0)),
