@@ -158,6 +158,19 @@ pub struct Mpf<const P: usize, const K: usize, const NY: usize, H> {
     last: Option<StepReport>,
 }
 
+/// The configuration and the last step, not the particle blocks.
+impl<const P: usize, const K: usize, const NY: usize, H> std::fmt::Debug for Mpf<P, K, NY, H> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Mpf")
+            .field("partition", &(P, K))
+            .field("n_particles", &self.n)
+            .field("resampler", &self.resampler)
+            .field("shared_riccati", &self.shared)
+            .field("last", &self.last)
+            .finish_non_exhaustive()
+    }
+}
+
 impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf<P, K, NY, H> {
     /// A filter for `model`.
     ///

@@ -264,6 +264,16 @@ struct StepCtx<'a, M> {
 /// interleaved harness runs; 1–12 % in criterion A/Bs of a noisy night, 2026-11-25).
 const PREFETCH_MIN: usize = 1 << 18;
 
+/// The configuration and the last step, not the particle arrays.
+impl<M> std::fmt::Debug for BatchBootstrap<M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BatchBootstrap")
+            .field("cfg", &self.cfg)
+            .field("last", &self.last)
+            .finish_non_exhaustive()
+    }
+}
+
 impl<M: ScalarModel> BatchBootstrap<M> {
     /// Allocate every buffer once.
     ///
@@ -339,9 +349,20 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         self.last = None;
     }
 
-    /// Current particles.
+    /// Current particles (empty before the first step and after [`reset`](Self::reset)).
     pub fn particles(&self) -> &[f64] {
-        &self.x
+        if self.last.is_some() { &self.x } else { &[] }
+    }
+
+    /// Time index of the current particles, `None` before the first step.
+    pub fn t(&self) -> Option<usize> {
+        self.last.map(|r| r.t)
+    }
+
+    /// The report of the last step: its log-likelihood increment, ESS and whether it
+    /// resampled.
+    pub fn last_report(&self) -> Option<&StepReport> {
+        self.last.as_ref()
     }
 
     /// Running log-likelihood estimate.
@@ -1196,8 +1217,10 @@ mod tests {
             };
             let mut f = BatchBootstrap::new(m, cfg).unwrap();
             assert!(matches!(f.mean(), Err(CoreError::Empty { .. })));
+            assert!(f.particles().is_empty() && f.t().is_none() && f.last_report().is_none());
             f.step(ys[0]).unwrap();
             let ok = f.step(ys[1]).unwrap();
+            assert_eq!((f.t(), f.last_report()), (Some(1), Some(&ok)));
             let (x, mean) = (f.particles().to_vec(), f.mean().unwrap());
             assert!(matches!(
                 f.step(Some(f64::NAN)),
@@ -1209,6 +1232,9 @@ mod tests {
             let next = f.step(ys[2]).unwrap();
             assert_eq!(next.t, 2);
             assert!(next.log_lik.is_finite() && f.mean().unwrap().is_finite());
+            f.reset();
+            assert!(f.particles().is_empty() && f.t().is_none());
+            assert!(format!("{f:?}").starts_with("BatchBootstrap { cfg: BatchConfig {"));
         }
     }
 

@@ -1,11 +1,11 @@
 //! The SIR particle filter: owns the particle set and its buffers.
 
-use super::{Bootstrap, Mutation, ResamplePolicy, RunSummary, StepAt, StepReport};
+use super::{Bootstrap, Guided, Mutation, ResamplePolicy, RunSummary, StepAt, StepReport};
 use crate::error::{CoreError, Result};
 use crate::limits::{
     PARTICLE_BUFFERS as PARTICLES, check_count, check_memory, try_filled, try_with_capacity,
 };
-use crate::model::{EuclideanState, StateSpaceModel};
+use crate::model::{EuclideanState, Proposal, StateSpaceModel, TransitionDensity};
 use crate::observe::{Observer, StepView};
 use crate::particles;
 use crate::resample::{Resample, Resampler};
@@ -89,6 +89,24 @@ impl<M: StateSpaceModel> ParticleFilter<M, Bootstrap, Resampler> {
     /// The bootstrap filter (Gordon, Salmond & Smith 1993).
     pub fn bootstrap(model: M, config: FilterConfig) -> Result<Self> {
         Self::new(model, Bootstrap, config.resampler, config)
+    }
+}
+
+impl<M: TransitionDensity, Q: Proposal<M>> ParticleFilter<M, Guided<Q>, Resampler> {
+    /// The guided filter with the proposal `q` and the configuration's resampler.
+    pub fn guided(model: M, q: Q, config: FilterConfig) -> Result<Self> {
+        Self::new(model, Guided(q), config.resampler, config)
+    }
+}
+
+/// The configuration and the last step, not the particles.
+impl<M: StateSpaceModel, P, Rs> std::fmt::Debug for ParticleFilter<M, P, Rs> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ParticleFilter")
+            .field("n_particles", &self.n)
+            .field("policy", &self.policy)
+            .field("last", &self.last)
+            .finish_non_exhaustive()
     }
 }
 
@@ -347,7 +365,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::filter::{EssThreshold, Guided};
+    use crate::filter::EssThreshold;
     use crate::mc::stream_rng;
     use crate::model::{Proposal, TransitionDensity};
     use crate::models::NoisyAr1;
@@ -516,6 +534,7 @@ mod tests {
         );
         pf.reset();
         assert!(empty(&pf));
+        assert!(format!("{pf:?}").contains("n_particles: 16"));
     }
 
     /// The transition used as a proposal: the guided weights must equal the bootstrap ones.
@@ -542,8 +561,7 @@ mod tests {
         let ys = data(40);
         let cfg = FilterConfig::new(100);
         let mut boot = ParticleFilter::bootstrap(ar1(), cfg).unwrap();
-        let mut guided =
-            ParticleFilter::new(ar1(), Guided(PriorProposal), cfg.resampler, cfg).unwrap();
+        let mut guided = ParticleFilter::guided(ar1(), PriorProposal, cfg).unwrap();
         let a = boot.run(&ys, None, &mut stream_rng(5, 0), &mut ()).unwrap();
         let b = guided
             .run(&ys, None, &mut stream_rng(5, 0), &mut ())

@@ -210,12 +210,7 @@ pub fn particle_filter(
         resampler: Resampler::Systematic,
         policy: ResamplePolicy::EssBelow(EssThreshold::Fraction(0.5)),
     };
-    Ok(ParticleFilter::new(
-        model,
-        Guided(LinearisedOptimal),
-        Resampler::Systematic,
-        cfg,
-    )?)
+    Ok(ParticleFilter::guided(model, LinearisedOptimal, cfg)?)
 }
 
 /// Filter a realisation with `n` particles; position means at `k = 1, …, K`.
