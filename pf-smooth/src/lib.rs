@@ -6,7 +6,8 @@
 //! EM and gradient-based maximum likelihood both need `τ_n = E[Σ_k s_k(X_k, X_{k+1}) | Y_{0:n}]`
 //! (eq. (5)). This crate estimates it for any pf-core model and any vector-valued additive
 //! functional, with the path-space estimator (eqs. (6)–(7)) or the fixed-lag one
-//! (eqs. (8)–(9)), both as pf-core observers. For the noisy AR(1) model of Section 5 it adds
+//! (eqs. (8)–(9)), both as pf-core observers, and (beyond the paper) with forward-only
+//! smoothing, the O(N²) reference free of path degeneracy. For the noisy AR(1) model of Section 5 it adds
 //! the EM statistics, exact EM from the RTS smoother, particle EM (SEM, MCEM), the score by
 //! Fisher's identity and the paper's experiments.
 //!
