@@ -22,9 +22,9 @@
 //! - A. Doucet, S. Godsill, C. Andrieu, "On sequential Monte Carlo sampling methods for
 //!   Bayesian filtering", *Statistics and Computing* 10, 2000 (FFBSm).
 
-use crate::error::{Result, SmoothError};
+use crate::error::Result;
 use crate::functional::AdditiveFunctional;
-use crate::path_space::{check_finite, check_len, copy_states, weighted_sum};
+use crate::path_space::{copy_states, weighted_estimate};
 use pf_core::TransitionDensity;
 use pf_core::mc::Par;
 use pf_core::observe::{Observer, StepView};
@@ -125,16 +125,16 @@ where
     /// Write `τ̂_k = Σ_i W_k^i T_k^i` into `out` (length d).
     ///
     /// # Errors
-    /// [`SmoothError::NoSteps`] before the first step, a length mismatch, or a non-finite
-    /// component ([`SmoothError::NonFiniteEstimate`]), which is also what a particle with
+    /// [`SmoothError::NoSteps`](crate::SmoothError::NoSteps) before the first step, a length
+    /// mismatch, or a non-finite component
+    /// ([`SmoothError::NonFiniteEstimate`](crate::SmoothError::NonFiniteEstimate)), which is also what a particle with
     /// no backward weight (every `f_k(ξ_k^i | ξ_{k−1}^j)` zero) leads to.
     pub fn estimate_into(&self, out: &mut [f64]) -> Result<()> {
-        let t = self.t.ok_or(SmoothError::NoSteps {
-            what: "forward-only smoothing estimator",
-        })?;
-        check_len(out.len(), self.d)?;
-        weighted_sum(&self.weights, &self.tk, self.d, out);
-        check_finite("forward-only smoothing estimate", t, out)
+        let names = (
+            "forward-only smoothing estimator",
+            "forward-only smoothing estimate",
+        );
+        weighted_estimate(names, self.t, (&self.weights, &self.tk, self.d), out)
     }
 
     /// [`estimate_into`](Self::estimate_into) a new vector.
@@ -263,6 +263,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::SmoothError;
     use crate::ar1::{Ar1Data, Ar1Statistics, Theta};
     use pf_core::filter::{FilterConfig, ParticleFilter};
     use pf_core::mc::stream_rng;

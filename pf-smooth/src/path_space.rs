@@ -67,12 +67,8 @@ impl<S: Clone, F: AdditiveFunctional<S>> PathSpace<S, F> {
     /// [`SmoothError::NoSteps`] before the first step, a length mismatch, or a non-finite
     /// component ([`SmoothError::NonFiniteEstimate`]).
     pub fn estimate_into(&self, out: &mut [f64]) -> Result<()> {
-        let t = self.t.ok_or(SmoothError::NoSteps {
-            what: "path-space estimator",
-        })?;
-        check_len(out.len(), self.d)?;
-        weighted_sum(&self.weights, &self.gamma, self.d, out);
-        check_finite("path-space estimate", t, out)
+        let names = ("path-space estimator", "path-space estimate");
+        weighted_estimate(names, self.t, (&self.weights, &self.gamma, self.d), out)
     }
 
     /// [`estimate_into`](Self::estimate_into) a new vector.
@@ -122,6 +118,21 @@ pub(crate) fn copy_states<S: Clone>(dst: &mut Vec<S>, src: &[S]) {
         dst.clear();
         dst.extend_from_slice(src);
     }
+}
+
+/// `out ← Σ_i W_i v_i` for the per-particle sums `v` (N×d, particle-major) of an estimator
+/// named `names.0` whose estimate is `names.1`, last at step `t`: the estimate of eq. (6),
+/// and of forward-only smoothing.
+pub(crate) fn weighted_estimate(
+    names: (&'static str, &'static str),
+    t: Option<usize>,
+    (w, v, d): (&[f64], &[f64], usize),
+    out: &mut [f64],
+) -> Result<()> {
+    let t = t.ok_or(SmoothError::NoSteps { what: names.0 })?;
+    check_len(out.len(), d)?;
+    weighted_sum(w, v, d, out);
+    check_finite(names.1, t, out)
 }
 
 /// `out ← Σ_i w_i v_i` for particle-major `v` (N×d).
