@@ -28,7 +28,7 @@
 //!
 //! Chunks, streams and the order of every reduction are fixed by `N` and the chunk size,
 //! not by the number of threads or by the instruction set, so [`Par::Seq`] and
-//! [`Par::Rayon`] on any pool, with [`Simd::Auto`] or [`Simd::Portable`], give
+//! [`Par::Rayon`] on any pool, with any [`Simd`] setting, give
 //! bit-identical results (tested). The streams differ from the generic filter's single
 //! stream, so the two filters agree in distribution, not draw by draw (tested through the
 //! unbiasedness of the likelihood estimate against the Kalman filter's exact value).
@@ -992,6 +992,7 @@ mod tests {
                 assert_eq!(seq, run(Par::Rayon, 1, Simd::Auto, off, 200), "{resampler}");
                 assert_eq!(seq, run(Par::Rayon, 2, Simd::Auto, off, 200), "{resampler}");
                 assert_eq!(seq, run(Par::Rayon, 3, Simd::Auto, off, 200), "{resampler}");
+                assert_eq!(seq, run(Par::Seq, 1, Simd::Avx2, off, 200), "{resampler}");
                 assert_eq!(
                     seq,
                     run(Par::Seq, 1, Simd::Portable, off, 200),

@@ -22,9 +22,11 @@
 //! filtering", ISPA 2005.
 
 mod chunked;
+mod counts;
 mod multinomial;
 mod offspring;
 mod poisson;
+mod poisson_avx512;
 mod residual;
 mod stratified;
 mod systematic;

@@ -152,6 +152,12 @@ impl<const W: usize> Runs<W> {
             && ks.iter().fold(self.pos, |a, &k| a.max(k)).saturating_add(W) <= m
     }
 
+    /// Continue from output `k`, the runs up to it written by the caller.
+    #[inline(always)]
+    pub(crate) fn skip_to(&mut self, k: usize) {
+        self.pos = k;
+    }
+
     /// Whether every one of the `m` outputs is written.
     #[inline(always)]
     pub(crate) fn is_full(&self, m: usize) -> bool {

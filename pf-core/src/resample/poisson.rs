@@ -1,10 +1,13 @@
 //! The Poisson machinery of the O(N) multinomial draws: counts with a rate per particle
 //! (multinomial), counts of one rate thinned per particle (residual), the uniformly chosen
 //! draws removed when conditioning a Poisson total, and the runs of ancestors they leave.
+//! The counts and the runs have AVX-512 twins in [`poisson_avx512`](super::poisson_avx512).
 
+use super::counts::Counts;
 use super::offspring::{Runs, SCAN};
-use crate::simd::math::{exp_nonpositive_lanes, unit_from_bits};
-use crate::simd::{LANES, LaneRng, set_bits};
+use crate::simd::avx512::Avx512;
+use crate::simd::math::{exp_fma_lanes, unit_from_bits};
+use crate::simd::{LANES, LaneRng, Simd, dispatch, set_bits};
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, Poisson};
 
@@ -66,7 +69,9 @@ impl Thresholds {
 #[derive(Debug)]
 pub(crate) struct DrawBuffers {
     /// Each particle's count.
-    pub(crate) counts: Vec<usize>,
+    pub(crate) counts: Counts,
+    /// The counts of a round that tops a short total up, before they join `counts`.
+    pub(crate) extra: Counts,
     /// The draws removed when conditioning on the total, then `usize::MAX`.
     pub(crate) removed: Vec<usize>,
     /// One bit per draw: which have been chosen for removal.
@@ -76,7 +81,8 @@ pub(crate) struct DrawBuffers {
 impl DrawBuffers {
     pub(crate) const fn new() -> Self {
         DrawBuffers {
-            counts: Vec::new(),
+            counts: Counts::new(),
+            extra: Counts::new(),
             removed: Vec::new(),
             seen: Vec::new(),
         }
@@ -121,21 +127,20 @@ pub(crate) fn distinct_sorted<R: Rng + ?Sized>(
 /// thinned at once; `QUICK` means "`QUICK` or more", finished one by one.
 const QUICK: usize = 4;
 
-/// `counts[j] ←` (with `add`, `+=`) the number of kept candidates of particle `j`: a
-/// Poisson(`rate`) number of candidates (`th` its thresholds), each kept with probability
-/// `keep(j) ∈ [0, 1]`. Returns the sum of the new counts.
+/// `counts[j] ←` the number of kept candidates of particle `j`: a Poisson(`rate`) number of
+/// candidates (`th` its thresholds), each kept with probability `keep(j) ∈ [0, 1]`. Returns
+/// the sum of the counts (each below [`Counts::BIG`]: at most the 48 outcomes of `th`).
 #[inline(always)]
 pub(crate) fn thin<R: Rng + ?Sized>(
-    counts: &mut [usize],
+    counts: &mut Counts,
     th: &Thresholds,
-    add: bool,
     keep: &impl Fn(usize) -> f64,
     lanes: &mut LaneRng,
     rng: &mut R,
 ) -> usize {
     let mut total = 0;
     let (mut v, mut u) = ([0u64; LANES], [0u64; LANES]);
-    for (b, block) in counts.chunks_mut(LANES).enumerate() {
+    for (b, block) in counts.small.chunks_mut(LANES).enumerate() {
         let j0 = b * LANES;
         let mut p = [0.0f64; LANES];
         for (q, p) in p[..block.len()].iter_mut().enumerate() {
@@ -181,7 +186,7 @@ pub(crate) fn thin<R: Rng + ?Sized>(
             k[q] = (0..cq).filter(|_| rng.random::<f64>() < p[q]).count();
         }
         for (n, &kq) in block.iter_mut().zip(&k) {
-            *n = if add { *n + kq } else { kq };
+            *n = kq as u8;
             total += kq;
         }
     }
@@ -201,132 +206,220 @@ pub(crate) fn round_mean(d: usize) -> f64 {
 
 /// Rates above this are drawn by `rand_distr`'s exact sampler (its PTRS rejection, O(1)
 /// whatever the rate) instead of by inversion, whose length grows with the rate.
-const RATE_INVERT: f64 = 12.0;
+pub(crate) const RATE_INVERT: f64 = 12.0;
 
 /// A cap on one count, far above any that resampling into memory can ask for.
 const MAX_COUNT: usize = 1 << 40;
 
-/// Terms of the distribution function compared in the vectorised pass; a count of `TERMS`
-/// means "`TERMS` or more" and is finished one term at a time.
-const TERMS: usize = 6;
+/// Terms of the inversion compared on every particle; the particles of a group of eight
+/// still above the last continue term by term (see [`poisson_counts`]). Eight suit rates
+/// around 1 with a tail to 5, the benchmark's weights: with six, a quarter of the groups
+/// continued, and the mispredicted exits cost more than two terms more for everyone (AVX-512
+/// counts, 3.45 against 1.82 ns per particle; nine terms 1.81, ten 2.3, twelve 3.3;
+/// performance log, 2026-11-27).
+pub(crate) const TERMS: usize = 8;
 
-/// `counts[j] ←` (with `add`, `+=`) a Poisson(`λ_j`) count, `λ_j = scale·w_j` (0 where
-/// that is negative or NaN), independent across particles. Returns the sum of the new
-/// counts (saturating) and the sum of the rates.
+/// The last term of an inversion: for `λ ≤ 12` the sum stops moving long before (its terms
+/// fall below 2⁻⁵³ of it from about the 50th), and `P(N > 127) < 10⁻⁶⁰`.
+pub(crate) const MAX_TERM: usize = 127;
+
+/// `1/i!`, `i = 0 … MAX_TERM`, by repeated division (each within `i` roundings).
+pub(crate) static INV_FACTORIAL: [f64; MAX_TERM + 1] = {
+    let mut t = [1.0; MAX_TERM + 1];
+    let mut i = 1;
+    while i <= MAX_TERM {
+        t[i] = t[i - 1] / i as f64;
+        i += 1;
+    }
+    t
+};
+
+/// `counts[j] ←` a Poisson(`λ_j`) count, `λ_j = scale·w_j` (0 where that is negative or
+/// NaN), independent across particles. Returns the sum of the counts (saturating) and the
+/// sum of the rates (in eight partial sums, lane `j mod 8` of each block of 64 into sum
+/// `j mod 8`, in order).
 ///
-/// Inversion: with one uniform `u` per particle (a lane step per 64 particles), the count
-/// is the first `i` with `u < F_i`, the distribution function summed term by term from
-/// `p_0 = e^{−λ}` by `p_i = p_{i−1}·λ/i`. The first [`TERMS`] terms are compared on all 64
-/// particles at once; the few particles past them, and those with `λ > 12`, are finished
-/// one by one (see [`poisson_rest`]). Exact up to the rounding of the terms (a few ulp of
-/// each probability).
-#[inline(always)]
+/// Inversion of one lane uniform `u` per particle (a lane step per 64 particles): the count
+/// is the number of `i ≥ 0` with `U ≥ S_i`, where `U = u·e^λ` and `S_i = Σ_{k ≤ i} λ^k/k!`,
+/// which is `u ≥ P(N ≤ i)` multiplied through by `e^λ`. The partial sums take one multiply
+/// (`λ^i = λ^{i−1}·λ`) and one fused multiply-add (`S_i = λ^i·(1/i!) + S_{i−1}`) per term,
+/// and no division: `e^λ` comes once per particle from [`exp_fma`](crate::simd::math::exp_fma).
+/// The first [`TERMS`] are compared on every particle; a group of eight particles some of
+/// which are still at or above the last sum continues a term at a time until none is, a
+/// particle stopping where `U < S_i`, or where the sum no longer moves past the mode
+/// (`i > λ`, `S_i = S_{i−1}`: the tail left is below 2⁻⁵² and `U` sits in it only through
+/// rounding). Rates above [`RATE_INVERT`] are drawn by `rand_distr` on `rng`, particle by
+/// particle in order. Exact up to the rounding of the sums (a few ulp of each probability).
+///
+/// On a CPU with AVX-512 (and `simd` [`Simd::Auto`]) the twin in `poisson_avx512` runs, the
+/// same operations eight particles to a register; otherwise the code below, compiled by
+/// [`dispatch`]. Both give the same counts (tested).
 pub(crate) fn poisson_counts<R: Rng + ?Sized>(
-    counts: &mut [usize],
+    simd: Simd,
+    counts: &mut Counts,
     w: &[f64],
     scale: f64,
-    add: bool,
     lanes: &mut LaneRng,
     rng: &mut R,
 ) -> (usize, f64) {
-    debug_assert_eq!(counts.len(), w.len());
+    counts.reset(w.len());
+    if let Some(cpu) = Avx512::get(simd) {
+        return super::poisson_avx512::poisson_counts(cpu, counts, w, scale, lanes, rng);
+    }
+    dispatch(
+        simd,
+        #[inline(always)]
+        || poisson_counts_portable(counts, w, scale, lanes, rng),
+    )
+}
+
+/// The portable body of [`poisson_counts`].
+#[inline(always)]
+fn poisson_counts_portable<R: Rng + ?Sized>(
+    counts: &mut Counts,
+    w: &[f64],
+    scale: f64,
+    lanes: &mut LaneRng,
+    rng: &mut R,
+) -> (usize, f64) {
     let mut total = 0usize;
-    // Eight partial sums of the rates (a vectorisable reduction).
     let mut rates = [0.0f64; 8];
     let mut bits = [0u64; LANES];
     let mut lam = [0.0f64; LANES];
-    let mut k = [0usize; LANES];
-    for (block, wb) in counts.chunks_mut(LANES).zip(w.chunks(LANES)) {
-        let len = block.len();
+    let mut k = [0u64; LANES];
+    for (b, wb) in w.chunks(LANES).enumerate() {
+        let (j0, len) = (b * LANES, wb.len());
         lanes.step(&mut bits);
         if len < LANES {
             lam.fill(0.0);
         }
         for (l, &w) in lam.iter_mut().zip(wb) {
-            let x = scale * w;
-            *l = if x > 0.0 { x } else { 0.0 };
+            *l = rate_of(scale * w);
         }
         for l8 in lam.chunks_exact(8) {
             for (r, l) in rates.iter_mut().zip(l8) {
                 *r += l;
             }
         }
-        poisson_block(&lam, &bits, &mut k, rng);
-        for (c, &k) in block.iter_mut().zip(&k) {
-            *c = if add { *c + k } else { k };
+        let escaped = poisson_block(&lam, &bits, &mut k);
+        for (c, &k) in counts.small[j0..j0 + len].iter_mut().zip(&k) {
+            *c = k as u8;
         }
-        total = total.saturating_add(k[..len].iter().sum::<usize>());
+        total += k[..len].iter().sum::<u64>() as usize;
+        let escaped = escaped & (u64::MAX >> (LANES - len));
+        total = total.saturating_add(escape(counts, escaped, j0, &lam, rng));
     }
     (total, rates.iter().sum())
 }
 
-/// Poisson(`lam[q]`) counts by inversion of the uniforms in `bits`, into `k`.
+/// The rate of a scaled weight `x`: `x`, or 0 where `x` is negative, zero or NaN (so that no
+/// NaN reaches the inversion).
 #[inline(always)]
-fn poisson_block<R: Rng + ?Sized>(
-    lam: &[f64; LANES],
-    bits: &[u64; LANES],
-    k: &mut [usize; LANES],
-    rng: &mut R,
-) {
-    let mut p = exp_nonpositive_lanes(std::array::from_fn::<f64, LANES, _>(|q| -lam[q]));
-    let u: [f64; LANES] = std::array::from_fn(|q| unit_from_bits(bits[q]));
-    let mut f = [0.0f64; LANES];
-    // Four lanes at a time through all the terms, so that they stay in registers (over all
-    // 64 lanes per term, they went through the stack, and the loads of misaligned vectors
-    // waited on the stores before them).
-    let groups = k
-        .chunks_exact_mut(4)
-        .zip(p.chunks_exact_mut(4).zip(f.chunks_exact_mut(4)))
-        .zip(u.chunks_exact(4).zip(lam.chunks_exact(4)));
-    for ((k, (p, f)), (u, lam)) in groups {
-        let mut k4 = [0usize; 4];
-        let mut p4: [f64; 4] = std::array::from_fn(|l| p[l]);
-        let mut f4 = p4;
-        for i in 1..TERMS {
-            let inv = 1.0 / i as f64;
-            for l in 0..4 {
-                k4[l] += usize::from(u[l] >= f4[l]);
-                p4[l] *= lam[l] * inv;
-                f4[l] += p4[l];
+pub(crate) fn rate_of(x: f64) -> f64 {
+    if x > 0.0 { x } else { 0.0 }
+}
+
+/// The inversion counts of one block, `k[q]` for rate `lam[q]` and draw `bits[q]`, and the
+/// mask of the lanes whose rate is above [`RATE_INVERT`] (their `k` is 0, for [`escape`]).
+#[inline(always)]
+fn poisson_block(lam: &[f64; LANES], bits: &[u64; LANES], k: &mut [u64; LANES]) -> u64 {
+    let e = exp_fma_lanes(*lam);
+    let u: [f64; LANES] = std::array::from_fn(|q| unit_from_bits(bits[q]) * e[q]);
+    let mut escaped = 0u64;
+    for (q, &l) in lam.iter().enumerate() {
+        escaped |= u64::from(l > RATE_INVERT) << q;
+    }
+    // Eight lanes at a time through all the terms, so that they stay in registers.
+    for (g, ((k, lam), u)) in k
+        .chunks_exact_mut(8)
+        .zip(lam.chunks_exact(8))
+        .zip(u.chunks_exact(8))
+        .enumerate()
+    {
+        let k: &mut [u64; 8] = k.try_into().expect("eight lanes");
+        let lam: &[f64; 8] = lam.try_into().expect("eight lanes");
+        let u: &[f64; 8] = u.try_into().expect("eight lanes");
+        let mut pw = *lam;
+        let mut s: [f64; 8] = std::array::from_fn(|l| 1.0 + lam[l]);
+        let mut ge: [bool; 8] = std::array::from_fn(|l| u[l] >= s[l]);
+        *k = std::array::from_fn(|l| u64::from(u[l] >= 1.0));
+        for &c in &INV_FACTORIAL[2..TERMS] {
+            for l in 0..8 {
+                k[l] += u64::from(ge[l]);
+                pw[l] *= lam[l];
+                s[l] = pw[l].mul_add(c, s[l]);
+                ge[l] = u[l] >= s[l];
             }
         }
-        for l in 0..4 {
-            k[l] = k4[l] + usize::from(u[l] >= f4[l]);
+        let mut more = 0u8;
+        for l in 0..8 {
+            k[l] += u64::from(ge[l]);
+            more |= u8::from(ge[l]) << l;
         }
-        p.copy_from_slice(&p4);
-        f.copy_from_slice(&f4);
+        more &= !((escaped >> (8 * g)) as u8);
+        if more != 0 {
+            continue_terms(k, lam, u, pw, s, more);
+        }
     }
-    let mut rest = 0u64;
-    for q in 0..LANES {
-        rest |= u64::from((k[q] == TERMS) | (lam[q] > RATE_INVERT)) << q;
+    for q in set_bits(escaped) {
+        k[q] = 0;
     }
-    for q in set_bits(rest) {
-        k[q] = poisson_rest(lam[q], u[q], p[q], f[q], rng);
+    escaped
+}
+
+/// The inversion continued from term [`TERMS`] for the lanes in `more`, which are at or above
+/// the sum `s` (`pw` the last power), until none is (see [`poisson_counts`]).
+#[cold]
+#[inline(never)]
+fn continue_terms(
+    k: &mut [u64; 8],
+    lam: &[f64; 8],
+    u: &[f64; 8],
+    mut pw: [f64; 8],
+    mut s: [f64; 8],
+    mut more: u8,
+) {
+    for (i, &c) in INV_FACTORIAL.iter().enumerate().skip(TERMS) {
+        if more == 0 {
+            break;
+        }
+        for l in 0..8 {
+            pw[l] *= lam[l];
+            let next = pw[l].mul_add(c, s[l]);
+            let go = u[l] >= next && !(i as f64 > lam[l] && next == s[l]);
+            let go = go && more & (1 << l) != 0;
+            s[l] = next;
+            k[l] += u64::from(go);
+            more = (more & !(1 << l)) | (u8::from(go) << l);
+        }
     }
 }
 
-/// The count of a particle the vectorised pass left: for `λ ≤ 12`, the inversion continued
-/// from term [`TERMS`] (`p`, `f`: the last term and the sum so far); above, `rand_distr`'s
-/// sampler on `rng`.
+/// The counts of the lanes in `escaped` (rates above [`RATE_INVERT`]), drawn by
+/// `rand_distr` on `rng` in lane order into `counts` at `j0 + q`; returns their sum.
+#[inline(always)]
+pub(crate) fn escape<R: Rng + ?Sized>(
+    counts: &mut Counts,
+    escaped: u64,
+    j0: usize,
+    lam: &[f64],
+    rng: &mut R,
+) -> usize {
+    let mut total = 0usize;
+    for q in set_bits(escaped) {
+        let c = large_rate(lam[q], rng);
+        counts.set(j0 + q, c);
+        total = total.saturating_add(c);
+    }
+    total
+}
+
+/// A Poisson(`lam`) count for a rate above [`RATE_INVERT`]. Weights far outside the
+/// contract can make rates of any size (the caller then normalises and draws again): the
+/// count is capped so that no sum of counts overflows.
 #[cold]
-fn poisson_rest<R: Rng + ?Sized>(lam: f64, u: f64, mut p: f64, mut f: f64, rng: &mut R) -> usize {
-    if lam > RATE_INVERT {
-        // Weights far outside the contract can make rates of any size (the caller then
-        // normalises and draws again): the count is capped so that no sum of counts
-        // overflows.
-        return Poisson::new(lam).map_or(0, |d| (d.sample(rng) as usize).min(MAX_COUNT));
-    }
-    let mut i = TERMS;
-    loop {
-        p *= lam / i as f64;
-        f += p;
-        // Past the mode, once the terms no longer move the sum, the tail left is below
-        // 2⁻⁵²: stop rather than loop on a sum that rounds short of `u`.
-        if u < f || (i as f64 > lam && p < f * f64::EPSILON) {
-            return i;
-        }
-        i += 1;
-    }
+fn large_rate<R: Rng + ?Sized>(lam: f64, rng: &mut R) -> usize {
+    Poisson::new(lam).map_or(0, |d| (d.sample(rng) as usize).min(MAX_COUNT))
 }
 
 /// Particle `j`'s `base(j)` copies and kept draws (its count less the draws `removed`, an
@@ -334,64 +427,213 @@ fn poisson_rest<R: Rng + ?Sized>(lam: f64, u: f64, mut p: f64, mut f: f64, rng: 
 /// `usize::MAX`) as one run of copies of `first + j` in `out`, written `W` at a time (see
 /// [`Runs`]). Boundaries are computed a block at a time; a block that holds a removal (one
 /// in about every `√M/3` particles) also finds the particle of each removal.
-#[inline(always)]
+///
+/// A full block whose runs end at least `W` outputs before the end of `out` writes them with
+/// no clamp and no end test per run (as `offspring::walk` does). The writer stays on the AVX2
+/// copy on a CPU with AVX-512: compiled for AVX-512 (one store of eight copies), it ran
+/// multinomial resampling no faster and residual resampling 15–30 % slower (performance log,
+/// 2026-11-27).
 pub(crate) fn write_runs<const W: usize>(
-    counts: &[usize],
+    simd: Simd,
+    counts: &Counts,
     removed: &[usize],
     base: &impl Fn(usize) -> usize,
     first: usize,
     out: &mut [usize],
 ) {
-    if u32::try_from(out.len()).is_ok() {
-        write_runs_with::<W, true>(counts, removed, base, first, out);
-    } else {
-        write_runs_with::<W, false>(counts, removed, base, first, out);
-    }
+    dispatch(
+        simd,
+        #[inline(always)]
+        || {
+            if u32::try_from(out.len()).is_ok() {
+                let mut writer = RunWriter::<W, true>::new(counts, removed, first);
+                while writer.clean_block(base, out) || writer.block(base, out) {}
+            } else {
+                let mut writer = RunWriter::<W, false>::new(counts, removed, first);
+                while writer.block(base, out) {}
+            }
+        },
+    );
 }
 
-/// [`write_runs`], with `SMALL` when `M < 2³²` (see [`Runs`]).
-#[inline(always)]
-fn write_runs_with<const W: usize, const SMALL: bool>(
-    counts: &[usize],
-    removed: &[usize],
-    base: &impl Fn(usize) -> usize,
+/// The state of [`write_runs`] between blocks of [`SCAN`] particles, with `SMALL` when
+/// `M < 2³²` (see [`Runs`]).
+struct RunWriter<'a, const W: usize, const SMALL: bool> {
+    counts: &'a Counts,
+    removed: &'a [usize],
     first: usize,
-    out: &mut [usize],
-) {
-    let mut runs = Runs::<W>::new();
-    let (mut drawn, mut kept, mut x) = (0usize, 0usize, 0usize);
-    let (mut kb, mut ends) = ([0usize; SCAN], [0usize; SCAN]);
-    for (b, block) in counts.chunks(SCAN).enumerate() {
-        let j0 = b * SCAN;
-        let kb = &mut kb[..block.len()];
-        for (q, (k, &c)) in kb.iter_mut().zip(block).enumerate() {
-            *k = base(j0 + q) + c;
+    runs: Runs<W>,
+    /// The next block's first particle.
+    j0: usize,
+    /// Draws counted before the block.
+    drawn: usize,
+    /// Outputs written before the block.
+    kept: usize,
+    /// The next removal.
+    x: usize,
+    /// The next entry of `counts.big`.
+    big: usize,
+}
+
+impl<'a, const W: usize, const SMALL: bool> RunWriter<'a, W, SMALL> {
+    fn new(counts: &'a Counts, removed: &'a [usize], first: usize) -> Self {
+        RunWriter {
+            counts,
+            removed,
+            first,
+            runs: Runs::new(),
+            j0: 0,
+            drawn: 0,
+            kept: 0,
+            x: 0,
+            big: 0,
         }
-        let end = drawn + block.iter().sum::<usize>();
-        if removed[x] < end {
+    }
+
+    /// Write the next block's runs if it is a full one with no big count, whose runs end at
+    /// least `W` outputs before the end of `out`; whether it did. Nothing changes otherwise.
+    /// The checks are vectorised, and each run is written with no clamp and no end test, its
+    /// boundary summed as it goes (no prefix pass). At N = 10⁴ most blocks hold a removal
+    /// (about `3√M` of them among `M/64` blocks), so removals are taken here too.
+    #[inline(always)]
+    fn clean_block(&mut self, base: &impl Fn(usize) -> usize, out: &mut [usize]) -> bool {
+        let j0 = self.j0;
+        let Some(bytes) = self.counts.small.get(j0..j0 + SCAN) else {
+            return false;
+        };
+        let bytes: &[u8; SCAN] = bytes.try_into().expect("a full block");
+        if !SMALL || bytes.contains(&Counts::BIG) {
+            return false;
+        }
+        let draws: usize = bytes.iter().map(|&c| usize::from(c)).sum();
+        let mut kb: [usize; SCAN] = std::array::from_fn(|q| base(j0 + q) + usize::from(bytes[q]));
+        // Each base is at most `M < 2³²` (a floor `⌊M·W_j⌋`, `W_j ≤ 1`), so the sum cannot
+        // overflow.
+        let mut total: usize = kb.iter().sum();
+        let end = self.drawn + draws;
+        let mut x = self.x;
+        if self.removed[x] < end {
             // Each removal comes off the particle whose draws hold it: the first whose draws
-            // end above it, found by counting the ends at or below it (a vectorised count
-            // per removal, not a loop with a branch per particle).
-            let ends = &mut ends[..block.len()];
-            for (e, &c) in ends.iter_mut().zip(block) {
-                drawn += c;
+            // end above it, found by counting the ends at or below it.
+            let mut ends = [0usize; SCAN];
+            let mut drawn = self.drawn;
+            for (e, &c) in ends.iter_mut().zip(bytes) {
+                drawn += usize::from(c);
                 *e = drawn;
             }
-            while removed[x] < end {
-                let r = removed[x];
+            while self.removed[x] < end {
+                let r = self.removed[x];
                 kb[ends.iter().filter(|&&e| e <= r).count()] -= 1;
+                total -= 1;
                 x += 1;
             }
         }
-        drawn = end;
+        if self.kept.saturating_add(total).saturating_add(W) > out.len() {
+            return false;
+        }
+        // `kept < M < 2³²` here, so 32 bits hold every position (see `Runs`).
+        let mut pos = self.kept as u32 as usize;
+        let mut v = [self.first + j0; W];
+        for &k in &kb {
+            out[pos..pos + W].copy_from_slice(&v);
+            if k > W {
+                out[pos + W..pos + k].fill(v[0]);
+            }
+            pos += k;
+            v = v.map(|a| a + 1);
+        }
+        self.x = x;
+        self.drawn = end;
+        self.kept += total;
+        self.runs.skip_to(self.kept);
+        self.j0 += SCAN;
+        true
+    }
+
+    /// Write the next block's runs; whether there is more to write.
+    #[inline(always)]
+    fn block(&mut self, base: &impl Fn(usize) -> usize, out: &mut [usize]) -> bool {
+        let j0 = self.j0;
+        let len = SCAN.min(self.counts.small.len() - j0);
+        if len == 0 {
+            return false;
+        }
+        // Before a block, fewer than `M` outputs are written (else the writer has stopped),
+        // so a block without big counts adds at most `64·(M + 254)` to the sums: below
+        // `usize::MAX` for any `M` that fits in memory, and plain additions (which vectorise)
+        // do. With a big count, saturating ones (a serial chain of compare-and-branch).
+        let plain = !self.counts.small[j0..j0 + len].contains(&Counts::BIG) && out.len() < 1 << 48;
+        if plain {
+            self.block_with::<true>(len, base, out)
+        } else {
+            self.block_with::<false>(len, base, out)
+        }
+    }
+
+    /// [`block`](Self::block), with plain additions when `PLAIN`, saturating ones otherwise.
+    #[inline(always)]
+    fn block_with<const PLAIN: bool>(
+        &mut self,
+        len: usize,
+        base: &impl Fn(usize) -> usize,
+        out: &mut [usize],
+    ) -> bool {
+        let add = |a: usize, b: usize| if PLAIN { a + b } else { a.saturating_add(b) };
+        let j0 = self.j0;
+        let block = &self.counts.small[j0..j0 + len];
+        let mut cb = [0usize; SCAN];
+        let cb = &mut cb[..len];
+        for (c, &s) in cb.iter_mut().zip(block) {
+            *c = usize::from(s);
+        }
+        if !PLAIN {
+            for c in cb.iter_mut().filter(|c| **c == usize::from(Counts::BIG)) {
+                self.big += 1;
+                *c = self.counts.big[self.big - 1].1;
+            }
+        }
+        let mut kb = [0usize; SCAN];
+        let kb = &mut kb[..len];
+        for (q, (k, &c)) in kb.iter_mut().zip(cb.iter()).enumerate() {
+            *k = add(base(j0 + q), c);
+        }
+        let drawn = if PLAIN {
+            cb.iter().sum()
+        } else {
+            cb.iter().fold(0, |a: usize, &c| a.saturating_add(c))
+        };
+        let end = self.drawn.saturating_add(drawn);
+        let clean = self.removed[self.x] >= end;
+        if !clean {
+            // Each removal comes off the particle whose draws hold it: the first whose draws
+            // end above it, found by counting the ends at or below it (a vectorised count
+            // per removal, not a loop with a branch per particle).
+            let mut ends = [0usize; SCAN];
+            let ends = &mut ends[..len];
+            let mut drawn = self.drawn;
+            for (e, &c) in ends.iter_mut().zip(cb.iter()) {
+                drawn = add(drawn, c);
+                *e = drawn;
+            }
+            while self.removed[self.x] < end {
+                let r = self.removed[self.x];
+                kb[ends.iter().filter(|&&e| e <= r).count()] -= 1;
+                self.x += 1;
+            }
+        }
+        self.drawn = end;
         for k in kb.iter_mut() {
-            kept += *k;
-            *k = kept;
+            self.kept = add(self.kept, *k);
+            *k = self.kept;
         }
-        runs.push_each::<SMALL, false>(out, first + j0, kb);
-        if runs.is_full(out.len()) {
-            return;
+        if clean && len == SCAN && self.runs.fits(kb, out.len()) {
+            self.runs.push_each::<true, true>(out, self.first + j0, kb);
+        } else {
+            self.runs
+                .push_each::<SMALL, false>(out, self.first + j0, kb);
         }
+        self.j0 += len;
+        !self.runs.is_full(out.len())
     }
 }
 
@@ -519,13 +761,14 @@ mod tests {
         {
             let mut rng = stream_rng(15, i as u64);
             let mut lanes = LaneRng::from_rng(&mut rng);
-            let mut counts = vec![0usize; n];
+            let mut counts = Counts::new();
+            counts.reset(n);
             let th = Thresholds::new(rate);
             dispatch(Simd::Auto, || {
-                thin(&mut counts, &th, false, &|_| p, &mut lanes, &mut rng)
+                thin(&mut counts, &th, &|_| p, &mut lanes, &mut rng)
             });
             let mut hist = vec![0usize; 40];
-            for &c in &counts {
+            for c in counts.to_vec() {
                 hist[c] += 1;
             }
             let (chi2, df) = pearson_pooled(&hist, |k| poisson_pmf(rate * p, k));
@@ -537,70 +780,141 @@ mod tests {
     }
 
     /// Poisson counts with per-particle rates follow Poisson(λ) on each path: the
-    /// vectorised terms alone (λ = 0.7), the inversion continued one by one (λ = 4.5 and
-    /// 11: P(N ≥ 6) = 0.30 and 0.96), and `rand_distr`'s sampler (λ = 30); the rates
-    /// interleaved in one call, so that every block mixes the paths. Chi-square per rate
-    /// over 20 000 particles. A second round with `add` adds independent counts (λ doubles),
-    /// and the returned sum of rates is theirs.
+    /// compared terms alone (λ = 0.7), the terms continued (λ = 4.5 and 11: P(N ≥ 8) = 0.17
+    /// and 0.88), and `rand_distr`'s sampler (λ = 30, a count of `Counts::BIG` or more for a
+    /// few); the rates interleaved in one call, so that every group mixes the paths, and on
+    /// every kernel. Chi-square per rate over 20 000 particles. A second round added to the
+    /// first gives Poisson(2λ), and the returned sum of rates is theirs.
     #[test]
     fn poisson_counts_follow_each_rate() {
         let rates = [0.7, 4.5, 11.0, 30.0];
         let n = 80_000;
         let w: Vec<f64> = (0..n).map(|j| rates[j % 4]).collect();
-        let mut rng = stream_rng(16, 0);
-        let mut lanes = LaneRng::from_rng(&mut rng);
-        let mut counts = vec![0usize; n];
-        for (round, add) in [(1.0, false), (2.0, true)] {
-            let (total, rate_sum) = dispatch(Simd::Auto, || {
-                poisson_counts(&mut counts, &w, 1.0, add, &mut lanes, &mut rng)
-            });
-            let want: f64 = w.iter().sum();
-            assert!(
-                (rate_sum - want).abs() < 1e-9 * want,
-                "{rate_sum} against {want}"
-            );
-            if !add {
-                assert_eq!(total, counts.iter().sum::<usize>());
-            }
-            for (i, &rate) in rates.iter().enumerate() {
-                let mut hist = vec![0usize; 200];
-                for &c in counts.iter().skip(i).step_by(4) {
-                    hist[c] += 1;
-                }
-                let (chi2, df) = pearson_pooled(&hist, |k| poisson_pmf(round * rate, k));
+        for simd in [Simd::Auto, Simd::Avx2, Simd::Portable] {
+            let mut rng = stream_rng(16, 0);
+            let mut lanes = LaneRng::from_rng(&mut rng);
+            let (mut counts, mut extra) = (Counts::new(), Counts::new());
+            for round in [1.0, 2.0] {
+                let into = if round == 1.0 {
+                    &mut counts
+                } else {
+                    &mut extra
+                };
+                let (total, rate_sum) = poisson_counts(simd, into, &w, 1.0, &mut lanes, &mut rng);
+                assert_eq!(total, into.to_vec().iter().sum::<usize>());
+                let want: f64 = w.iter().sum();
                 assert!(
-                    chi2 < chi2_quantile_999(df),
-                    "λ = {}: χ² {chi2} on {df} df",
-                    round * rate
+                    (rate_sum - want).abs() < 1e-9 * want,
+                    "{rate_sum} against {want}"
                 );
+                if round == 2.0 {
+                    counts.add(&extra);
+                }
+                let all = counts.to_vec();
+                for (i, &rate) in rates.iter().enumerate() {
+                    let mut hist = vec![0usize; 200];
+                    for &c in all.iter().skip(i).step_by(4) {
+                        hist[c] += 1;
+                    }
+                    let (chi2, df) = pearson_pooled(&hist, |k| poisson_pmf(round * rate, k));
+                    assert!(
+                        chi2 < chi2_quantile_999(df),
+                        "{simd:?}, λ = {}: χ² {chi2} on {df} df",
+                        round * rate
+                    );
+                }
             }
         }
     }
 
-    /// The inversion ends even for a uniform the rounded distribution function never
-    /// passes, near the tail's end rather than running on.
+    /// Every kernel gives the same counts, totals and sums of rates, draw for draw: rates
+    /// around the escape threshold and far beyond it (counts of `Counts::BIG` and more),
+    /// zero, negative, NaN and infinite weights, groups that continue, and lengths that end
+    /// inside a block or a group. Then the same lanes and generator go on alike.
+    #[test]
+    fn every_kernel_counts_the_same() {
+        let specials = [
+            0.0,
+            -1.0,
+            f64::NAN,
+            f64::INFINITY,
+            12.0,
+            12.000_000_1,
+            11.999_999,
+            400.0,
+            1e-300,
+            6.5,
+        ];
+        for (case, n) in [1usize, 7, 63, 64, 65, 200, 1000, 4099]
+            .into_iter()
+            .enumerate()
+        {
+            let w: Vec<f64> = (0..n)
+                .map(|j| match j % 13 {
+                    0 => specials[(j / 13) % specials.len()],
+                    r => (r as f64 / 2.6).powi(2),
+                })
+                .collect();
+            let run = |simd| {
+                let mut rng = stream_rng(21, case as u64);
+                let mut lanes = LaneRng::from_rng(&mut rng);
+                let mut counts = Counts::new();
+                let (t, rates) = poisson_counts(simd, &mut counts, &w, 1.3, &mut lanes, &mut rng);
+                let mut after = [0u64; LANES];
+                lanes.step(&mut after);
+                (counts.to_vec(), t, rates.to_bits(), after, rng.next_u64())
+            };
+            let auto = run(Simd::Auto);
+            assert!(auto.0.iter().any(|&c| c >= usize::from(Counts::BIG)) || n < 13 * 8);
+            assert_eq!(auto, run(Simd::Avx2), "N = {n}");
+            assert_eq!(auto, run(Simd::Portable), "N = {n}");
+        }
+    }
+
+    /// The inversion ends, near the tail's end, for a uniform the rounded sums never pass.
     #[test]
     fn inversion_stops_at_the_top_of_the_unit_interval() {
         for lam in [0.5f64, 6.0, 12.0] {
-            // The state after the vectorised terms: p_5 and F_5.
-            let mut p = (-lam).exp();
-            let mut f = p;
-            for i in 1..TERMS {
-                p *= lam / i as f64;
-                f += p;
+            let lanes = [lam; 8];
+            let u = [(1.0 - f64::EPSILON / 2.0) * crate::simd::math::exp_fma(lam); 8];
+            let mut pw = lanes;
+            let mut s = [1.0 + lam; 8];
+            let mut k = [0u64; 8];
+            for &c in &INV_FACTORIAL[2..TERMS] {
+                for l in 0..8 {
+                    pw[l] *= lam;
+                    s[l] = pw[l].mul_add(c, s[l]);
+                }
             }
-            let k = poisson_rest(lam, 1.0 - f64::EPSILON / 2.0, p, f, &mut stream_rng(1, 0));
-            assert!(k >= TERMS && (k as f64) < lam + 40.0, "λ = {lam}: {k}");
+            continue_terms(&mut k, &lanes, &u, pw, s, 0xff);
+            assert!(
+                k.iter().all(|&k| (k as f64) < lam + 40.0),
+                "λ = {lam}: {k:?}"
+            );
         }
     }
 
     /// The runs equal the draws written out one by one, the removed ones left out, after
-    /// each particle's base copies; with removals in most blocks and in none.
+    /// each particle's base copies, on every kernel: with removals in most blocks, in few
+    /// and in none (where full blocks take the unchecked runs), long runs and a big count.
     #[test]
     fn runs_leave_out_exactly_the_removed_draws() {
         let mut rng = stream_rng(17, 0);
-        for (n, per_draw) in [(300usize, 0.3), (1000, 0.01), (5, 0.5)] {
-            let counts: Vec<usize> = (0..n).map(|j| (j * 7 + 3) % 5).collect();
+        for (n, per_draw) in [
+            (300usize, 0.3),
+            (1000, 0.01),
+            (5, 0.5),
+            (1000, 0.0),
+            (130, 0.0),
+        ] {
+            // Counts beyond one store of copies (11) and a big one (300).
+            let counts: Vec<usize> = (0..n)
+                .map(|j| match j {
+                    100 => 300,
+                    j if j % 17 == 0 => 11,
+                    j => (j * 7 + 3) % 5,
+                })
+                .collect();
             let base = |j: usize| j % 3;
             let t: usize = counts.iter().sum();
             let mut removed: Vec<usize> =
@@ -617,12 +931,19 @@ mod tests {
                 }
             }
             removed.push(usize::MAX);
-            let mut out = vec![usize::MAX; want.len()];
-            write_runs::<4>(&counts, &removed, &base, 0, &mut out);
-            let mut out8 = vec![usize::MAX; want.len()];
-            write_runs::<8>(&counts, &removed, &base, 0, &mut out8);
-            assert_eq!(out8, want, "N = {n}");
-            assert_eq!(out, want, "N = {n}");
+            let mut packed = Counts::new();
+            packed.reset(n);
+            for (j, &c) in counts.iter().enumerate() {
+                packed.set(j, c);
+            }
+            for simd in [Simd::Auto, Simd::Avx2, Simd::Portable] {
+                let mut out = vec![usize::MAX; want.len()];
+                write_runs::<4>(simd, &packed, &removed, &base, 0, &mut out);
+                let mut out8 = vec![usize::MAX; want.len()];
+                write_runs::<8>(simd, &packed, &removed, &base, 0, &mut out8);
+                assert_eq!(out8, want, "N = {n}, {simd:?}");
+                assert_eq!(out, want, "N = {n}, {simd:?}");
+            }
         }
     }
 }

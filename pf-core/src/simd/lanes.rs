@@ -91,6 +91,13 @@ impl LaneRng {
         }
     }
 
+    /// The lanes' state, `s[k][l]` word `k` of lane `l`: for the AVX-512 kernels, which step
+    /// eight lanes at a time (`simd::avx512::x86::step8`).
+    #[inline(always)]
+    pub(crate) fn state(&mut self) -> &mut [[u64; LANES]; 4] {
+        &mut self.s
+    }
+
     /// Fill `out` (length a multiple of [`LANES`]) with raw 64-bit draws.
     #[cfg(test)]
     fn fill_bits(&mut self, out: &mut [u64]) {

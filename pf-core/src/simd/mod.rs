@@ -1,28 +1,40 @@
 //! Vectorised kernels: a lock-step multi-lane random generator, ziggurat normals and
-//! exponentials, and a branch-free `exp`, with run-time CPU dispatch.
+//! exponentials, and branch-free `exp`s, with run-time CPU dispatch.
 //!
 //! Every kernel is plain Rust written so that LLVM can vectorise it (fixed-width lanes,
-//! selects instead of branches, no `mul_add`). `dispatch` compiles it twice: once for the
-//! baseline target, and once inside a function with `#[target_feature(enable = "avx2")]`,
-//! chosen at run time when the CPU has AVX2. Both copies perform the same IEEE-754
-//! operations in the same order (Rust never contracts `a * b + c` into a fused multiply-add,
-//! and the kernels call no libm function whose result could depend on the instruction set),
-//! so **the AVX2 and the portable paths give bit-identical results** (tested); AVX2 only
-//! makes them faster. [`Simd::Portable`] forces the portable path.
+//! selects instead of branches). `dispatch` compiles it twice: once for the baseline
+//! target, and once inside a function with `#[target_feature(enable = "avx2,fma")]`, chosen
+//! at run time when the CPU has both. A few kernels on the hottest paths also have an
+//! AVX-512 twin written with `core::arch` intrinsics (see [`avx512`](self::avx512)), chosen
+//! at run time when the CPU has AVX-512.
+//!
+//! All copies perform the same IEEE-754 operations in the same order: Rust never contracts
+//! `a * b + c` into a fused multiply-add, the kernels that want one ask for it with
+//! `f64::mul_add` (correctly rounded everywhere: one instruction where the CPU has FMA, the
+//! C library's exact `fma` on the portable copy), and no kernel calls a libm function whose
+//! result could depend on the instruction set. So **every path gives bit-identical
+//! results** (tested); the wider ones only make them faster. [`Simd::Avx2`] and
+//! [`Simd::Portable`] cap the instruction set, for comparison and audits.
 
+pub(crate) mod avx512;
 mod lanes;
 pub mod math;
 mod tables;
 
 pub use lanes::{LANES, LaneRng};
 
-/// Which compiled copy of the vectorised kernels runs. Both give the same numbers.
+/// Which compiled copy of the vectorised kernels runs. All give the same numbers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum Simd {
-    /// The AVX2 copy when the CPU has AVX2 (detected at run time), the portable one otherwise.
+    /// The widest copy the CPU runs (detected at run time): the AVX-512 kernels where it
+    /// has AVX-512, the AVX2 copy where it has AVX2 and FMA, the portable one otherwise.
     #[default]
     Auto,
-    /// Always the portable copy (baseline x86-64: SSE2), for comparison and audits.
+    /// At most the AVX2 copy, even on a CPU with AVX-512: for comparison.
+    Avx2,
+    /// Always the portable copy (baseline x86-64: SSE2), for comparison and audits. Kernels
+    /// with fused multiply-adds compute them in the C library's `fma` here, which is exact
+    /// but slow.
     Portable,
 }
 
@@ -75,14 +87,14 @@ pub(crate) fn prefetch<T>(p: *const T, len: usize) {
     let _ = (p, len);
 }
 
-/// Run `f`, compiled with AVX2 enabled when `simd` is [`Simd::Auto`] and the CPU has it.
+/// Run `f`, compiled with AVX2 and FMA enabled when `simd` allows it and the CPU has both.
 ///
 /// `f` should be an `#[inline(always)]` closure whose helpers are `#[inline(always)]` too, so
 /// that its whole body is compiled inside the AVX2 function.
 #[inline]
 pub(crate) fn dispatch<R>(simd: Simd, f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
-    if simd == Simd::Auto {
+    if simd != Simd::Portable {
         return avx2::run(f);
     }
     let _ = simd;
@@ -91,21 +103,21 @@ pub(crate) fn dispatch<R>(simd: Simd, f: impl FnOnce() -> R) -> R {
 
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
-    /// `f` compiled with AVX2 enabled.
-    #[target_feature(enable = "avx2")]
+    /// `f` compiled with AVX2 and FMA enabled.
+    #[target_feature(enable = "avx2,fma")]
     fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
         f()
     }
 
-    /// One of the crate's two `unsafe` blocks (the other is in [`prefetch`](super::prefetch)):
-    /// call the AVX2 copy only on a CPU that has AVX2.
+    /// Call the AVX2 copy only on a CPU that has AVX2 and FMA.
     #[allow(unsafe_code)]
     #[inline]
     pub(super) fn run<R>(f: impl FnOnce() -> R) -> R {
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: `with_avx2` is safe to call on any CPU that supports AVX2, and the
-            // run-time check just above established that this one does. The detection
-            // result is cached by std, so the check costs one atomic load.
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: `with_avx2` is safe to call on any CPU that supports AVX2 and FMA, and
+            // the run-time checks just above established that this one does. The detection
+            // result is cached by std, so each check costs one atomic load.
             unsafe { with_avx2(f) }
         } else {
             f()
