@@ -1,7 +1,7 @@
 //! Multinomial resampling in O(N): Poisson offspring counts, conditioned on their total.
 
 use super::Resample;
-use super::poisson::{DrawBuffers, distinct_sorted, poisson_counts, round_mean, write_runs};
+use super::poisson::{DrawBuffers, Rates, distinct_sorted, poisson_counts, round_mean, write_runs};
 use crate::simd::{LaneRng, Simd};
 use rand::Rng;
 use std::cell::RefCell;
@@ -67,7 +67,7 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
         // The first round assumes weights summing to 1 and measures their mass; it is redone,
         // normalised, when the mass is off by more than rounding.
         let mean = round_mean(m);
-        let (mut t, rates) = poisson_counts(simd, counts, w, mean, &mut lanes, rng);
+        let (mut t, rates) = poisson_counts(simd, counts, w, Rates::Scaled(mean), &mut lanes, rng);
         let mass = rates / mean;
         if !(mass > 0.0 && mass.is_finite()) {
             out.fill(first + n - 1);
@@ -75,11 +75,13 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
         }
         if (mass - 1.0).abs() > 1e-6 {
             let s = mean / mass;
-            t = poisson_counts(simd, counts, w, s, &mut lanes, rng).0;
+            t = poisson_counts(simd, counts, w, Rates::Scaled(s), &mut lanes, rng).0;
         }
         while t < m {
             let s = round_mean(m - t) / mass;
-            t = t.saturating_add(poisson_counts(simd, extra, w, s, &mut lanes, rng).0);
+            t = t.saturating_add(
+                poisson_counts(simd, extra, w, Rates::Scaled(s), &mut lanes, rng).0,
+            );
             counts.add(extra);
         }
         distinct_sorted(t, t - m, rng, seen, removed);

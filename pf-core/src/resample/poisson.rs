@@ -1,67 +1,15 @@
 //! The Poisson machinery of the O(N) multinomial draws: counts with a rate per particle
-//! (multinomial), counts of one rate thinned per particle (residual), the uniformly chosen
-//! draws removed when conditioning a Poisson total, and the runs of ancestors they leave.
+//! (multinomial and residual resampling), the uniformly chosen draws removed when
+//! conditioning a Poisson total, and the runs of ancestors they leave.
 //! The counts and the runs have AVX-512 twins in [`poisson_avx512`](super::poisson_avx512).
 
 use super::counts::Counts;
 use super::offspring::{Runs, SCAN};
 use crate::simd::avx512::Avx512;
-use crate::simd::math::{exp_fma_lanes, unit_from_bits};
+use crate::simd::math::{exp_fma_lanes, floor_index, unit_from_bits};
 use crate::simd::{LANES, LaneRng, Simd, dispatch, set_bits};
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, Poisson};
-
-/// Outcomes with a threshold; for the rates this module is used with (at most 4:
-/// `P(N ≥ 48) < 10⁻³⁴` there) the count stops well before the last.
-const LEN: usize = 48;
-
-/// `2⁵³`, above every 53-bit draw.
-const TWO53: u64 = 1 << 53;
-
-/// Inversion thresholds of a Poisson(`rate`) law: with `v` a uniform 53-bit integer,
-/// `#{k : v ≥ T_k}` is a Poisson(`rate`) count (`T_k = ⌊2⁵³·P(N ≤ k)⌋`, exact to 2⁻⁵³ per
-/// outcome; the last threshold is 2⁵³, above every draw, where the tail is below 2⁻⁵³).
-#[derive(Debug, Clone)]
-pub(crate) struct Thresholds {
-    t: [u64; LEN],
-}
-
-impl Thresholds {
-    /// The thresholds of Poisson(`rate`), `0 < rate ≤ 4`.
-    pub(crate) fn new(rate: f64) -> Self {
-        debug_assert!(rate > 0.0 && rate <= 4.0, "rate {rate}");
-        let mut t = [TWO53; LEN];
-        let (mut term, mut cdf) = ((-rate).exp(), 0.0f64);
-        for (k, tk) in t.iter_mut().enumerate() {
-            cdf += term;
-            // Stop where the distribution function rounds to 1, or stalls just below it
-            // with a tail `P(N > k) < 2·term < 2⁻⁵³` (past `2·rate` the terms more than
-            // halve): the count then never passes `k`.
-            if cdf >= 1.0 || (k as f64 >= 2.0 * rate && term < 1.0 / (2 * TWO53) as f64) {
-                break;
-            }
-            *tk = (cdf * TWO53 as f64) as u64;
-            term *= rate / (k + 1) as f64;
-        }
-        Thresholds { t }
-    }
-
-    /// The count of `v` against the first `Q` thresholds (branch-free; `Q` means "`Q` or
-    /// more", finished by [`Thresholds::count_from`]).
-    #[inline(always)]
-    pub(crate) fn count_quick<const Q: usize>(&self, v: u64) -> usize {
-        let mut k = 0;
-        for &th in &self.t[..Q] {
-            k += usize::from(v >= th);
-        }
-        k
-    }
-
-    /// The whole count of `v`, known to be at least `q`.
-    pub(crate) fn count_from(&self, v: u64, q: usize) -> usize {
-        q + self.t[q..].iter().take_while(|&&th| v >= th).count()
-    }
-}
 
 /// The per-thread buffers of the Poisson draws, reused from call to call: every call
 /// overwrites what it reads, and a buffer grows only when a call's random totals need more
@@ -123,76 +71,6 @@ pub(crate) fn distinct_sorted<R: Rng + ?Sized>(
     out.push(usize::MAX);
 }
 
-/// Candidate counts compared in the vectorised pass, where up to `QUICK − 1` candidates are
-/// thinned at once; `QUICK` means "`QUICK` or more", finished one by one.
-const QUICK: usize = 4;
-
-/// `counts[j] ←` the number of kept candidates of particle `j`: a Poisson(`rate`) number of
-/// candidates (`th` its thresholds), each kept with probability `keep(j) ∈ [0, 1]`. Returns
-/// the sum of the counts (each below [`Counts::BIG`]: at most the 48 outcomes of `th`).
-#[inline(always)]
-pub(crate) fn thin<R: Rng + ?Sized>(
-    counts: &mut Counts,
-    th: &Thresholds,
-    keep: &impl Fn(usize) -> f64,
-    lanes: &mut LaneRng,
-    rng: &mut R,
-) -> usize {
-    let mut total = 0;
-    let (mut v, mut u) = ([0u64; LANES], [0u64; LANES]);
-    for (b, block) in counts.small.chunks_mut(LANES).enumerate() {
-        let j0 = b * LANES;
-        let mut p = [0.0f64; LANES];
-        for (q, p) in p[..block.len()].iter_mut().enumerate() {
-            *p = keep(j0 + q);
-        }
-        lanes.step(&mut v);
-        lanes.step(&mut u);
-        let mut k = [0usize; LANES];
-        let mut c = [0usize; LANES];
-        for q in 0..LANES {
-            let cq = th.count_quick::<QUICK>(v[q] >> 11);
-            // Binomial(cq, p) kept candidates by inversion of one uniform, for cq ≤ 3: the
-            // distribution function at 0, 1 and 2 (2 where it is 1 already, above every
-            // uniform).
-            let (pq, qq) = (p[q], 1.0 - p[q]);
-            let q2 = qq * qq;
-            let q3 = q2 * qq;
-            let f0 = match cq {
-                1 => qq,
-                2 => q2,
-                3 => q3,
-                _ => 2.0,
-            };
-            let f1 = match cq {
-                2 => 1.0 - pq * pq,
-                3 => q3 + 3.0 * pq * q2,
-                _ => 2.0,
-            };
-            let f2 = if cq == 3 { 1.0 - pq * pq * pq } else { 2.0 };
-            let uq = unit_from_bits(u[q]);
-            k[q] = usize::from(uq >= f0) + usize::from(uq >= f1) + usize::from(uq >= f2);
-            c[q] = cq;
-        }
-        // Particles with QUICK candidates or more: a bit mask, so that the scalar work is
-        // per such particle.
-        let mut rest = 0u64;
-        for (q, &cq) in c.iter().enumerate() {
-            rest |= u64::from(cq == QUICK) << q;
-        }
-        rest &= u64::MAX >> (LANES - block.len());
-        for q in set_bits(rest) {
-            let cq = th.count_from(v[q] >> 11, QUICK);
-            k[q] = (0..cq).filter(|_| rng.random::<f64>() < p[q]).count();
-        }
-        for (n, &kq) in block.iter_mut().zip(&k) {
-            *n = kq as u8;
-            total += kq;
-        }
-    }
-    total
-}
-
 /// Standard deviations of a Poisson total by which a round overshoots its target.
 const OVERSHOOT: f64 = 3.0;
 
@@ -234,8 +112,33 @@ pub(crate) static INV_FACTORIAL: [f64; MAX_TERM + 1] = {
     t
 };
 
-/// `counts[j] ←` a Poisson(`λ_j`) count, `λ_j = scale·w_j` (0 where that is negative or
-/// NaN), independent across particles. Returns the sum of the counts (saturating) and the
+/// How a particle's Poisson rate comes from its weight `w`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Rates {
+    /// `λ = a·w`, or 0 where that is negative, zero or NaN: multinomial resampling's
+    /// `μ·W_j`.
+    Scaled(f64),
+    /// `λ = (x − ⌊x⌋)·b` with `x = a·w`: residual resampling's residual `M·W_j − ⌊M·W_j⌋`,
+    /// times the round's rate and normalisation `b`. For weights in [0, 1] and `a < 2⁵¹`.
+    Residuals { a: f64, b: f64 },
+}
+
+impl Rates {
+    /// The rate of weight `w`.
+    #[inline(always)]
+    pub(crate) fn of(self, w: f64) -> f64 {
+        match self {
+            Rates::Scaled(a) => rate_of(a * w),
+            Rates::Residuals { a, b } => {
+                let x = a * w;
+                (x - floor_index(x).1) * b
+            }
+        }
+    }
+}
+
+/// `counts[j] ←` a Poisson(`λ_j`) count, `λ_j` from `w_j` by `rates` (see [`Rates`]),
+/// independent across particles. Returns the sum of the counts (saturating) and the
 /// sum of the rates (in eight partial sums, lane `j mod 8` of each block of 64 into sum
 /// `j mod 8`, in order).
 ///
@@ -258,18 +161,18 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
     simd: Simd,
     counts: &mut Counts,
     w: &[f64],
-    scale: f64,
+    rates: Rates,
     lanes: &mut LaneRng,
     rng: &mut R,
 ) -> (usize, f64) {
     counts.reset(w.len());
     if let Some(cpu) = Avx512::get(simd) {
-        return super::poisson_avx512::poisson_counts(cpu, counts, w, scale, lanes, rng);
+        return super::poisson_avx512::poisson_counts(cpu, counts, w, rates, lanes, rng);
     }
     dispatch(
         simd,
         #[inline(always)]
-        || poisson_counts_portable(counts, w, scale, lanes, rng),
+        || poisson_counts_portable(counts, w, rates, lanes, rng),
     )
 }
 
@@ -278,12 +181,12 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
 fn poisson_counts_portable<R: Rng + ?Sized>(
     counts: &mut Counts,
     w: &[f64],
-    scale: f64,
+    rates: Rates,
     lanes: &mut LaneRng,
     rng: &mut R,
 ) -> (usize, f64) {
     let mut total = 0usize;
-    let mut rates = [0.0f64; 8];
+    let mut sums = [0.0f64; 8];
     let mut bits = [0u64; LANES];
     let mut lam = [0.0f64; LANES];
     let mut k = [0u64; LANES];
@@ -294,10 +197,10 @@ fn poisson_counts_portable<R: Rng + ?Sized>(
             lam.fill(0.0);
         }
         for (l, &w) in lam.iter_mut().zip(wb) {
-            *l = rate_of(scale * w);
+            *l = rates.of(w);
         }
         for l8 in lam.chunks_exact(8) {
-            for (r, l) in rates.iter_mut().zip(l8) {
+            for (r, l) in sums.iter_mut().zip(l8) {
                 *r += l;
             }
         }
@@ -309,7 +212,7 @@ fn poisson_counts_portable<R: Rng + ?Sized>(
         let escaped = escaped & (u64::MAX >> (LANES - len));
         total = total.saturating_add(escape(counts, escaped, j0, &lam, rng));
     }
-    (total, rates.iter().sum())
+    (total, sums.iter().sum())
 }
 
 /// The rate of a scaled weight `x`: `x`, or 0 where `x` is negative, zero or NaN (so that no
@@ -644,48 +547,6 @@ mod tests {
     use crate::simd::{Simd, dispatch};
     use crate::testing::{chi2_quantile_999, pearson_pooled, poisson_pmf};
 
-    /// The thresholds are the distribution function, to the 53-bit grid, and stop where it
-    /// rounds to 1.
-    #[test]
-    fn thresholds_are_the_poisson_cdf() {
-        for rate in [0.3, 1.0, 1.003, 2.5, 4.0] {
-            let th = Thresholds::new(rate);
-            let mut cdf = 0.0;
-            for (k, &t) in th.t.iter().enumerate() {
-                cdf += poisson_pmf(rate, k);
-                let want = cdf.min(1.0) * TWO53 as f64;
-                assert!(
-                    (t as f64 - want).abs() <= 64.0,
-                    "rate {rate}, k = {k}: {t} against {want}"
-                );
-            }
-            let last =
-                th.t.iter()
-                    .position(|&x| x == TWO53)
-                    .expect("a last threshold");
-            assert!(last < 40, "rate {rate}: {last}");
-        }
-    }
-
-    /// The quick count and its continuation give the full count.
-    #[test]
-    fn quick_count_and_continuation_agree() {
-        let th = Thresholds::new(2.5);
-        let mut rng = stream_rng(4, 0);
-        for _ in 0..10_000 {
-            let v = rng.next_u64() >> 11;
-            let full = th.t.iter().filter(|&&x| v >= x).count();
-            let quick = th.count_quick::<3>(v);
-            let got = if quick == 3 {
-                th.count_from(v, 3)
-            } else {
-                quick
-            };
-            assert_eq!(got, full);
-        }
-    }
-
-    /// Exactly `d` distinct sorted indices below `t`, then the sentinel; and every index is
     /// equally likely to be chosen (chi-square over 8 cells, 7 df, P(χ² > 24.3) = 0.001).
     #[test]
     fn distinct_sorted_is_a_uniform_subset() {
@@ -749,41 +610,6 @@ mod tests {
         }
     }
 
-    /// Thinning a Poisson(Λ) number of candidates with probability `p` gives Poisson(Λ·p)
-    /// counts, on the vectorised binomial path (Λ = 1.5: most particles have at most three
-    /// candidates) and on the scalar one (Λ = 3.9: a third have four or more).
-    #[test]
-    fn thinned_counts_are_poisson() {
-        let n = 40_000;
-        for (i, (rate, p)) in [(1.5, 0.8), (1.5, 0.3), (1.0, 0.05), (3.9, 0.9), (3.9, 0.5)]
-            .into_iter()
-            .enumerate()
-        {
-            let mut rng = stream_rng(15, i as u64);
-            let mut lanes = LaneRng::from_rng(&mut rng);
-            let mut counts = Counts::new();
-            counts.reset(n);
-            let th = Thresholds::new(rate);
-            dispatch(Simd::Auto, || {
-                thin(&mut counts, &th, &|_| p, &mut lanes, &mut rng)
-            });
-            let mut hist = vec![0usize; 40];
-            for c in counts.to_vec() {
-                hist[c] += 1;
-            }
-            let (chi2, df) = pearson_pooled(&hist, |k| poisson_pmf(rate * p, k));
-            assert!(
-                chi2 < chi2_quantile_999(df),
-                "Λ = {rate}, p = {p}: χ² {chi2} on {df} df"
-            );
-        }
-    }
-
-    /// Poisson counts with per-particle rates follow Poisson(λ) on each path: the
-    /// compared terms alone (λ = 0.7), the terms continued (λ = 4.5 and 11: P(N ≥ 8) = 0.17
-    /// and 0.88), and `rand_distr`'s sampler (λ = 30, a count of `Counts::BIG` or more for a
-    /// few); the rates interleaved in one call, so that every group mixes the paths, and on
-    /// every kernel. Chi-square per rate over 20 000 particles. A second round added to the
     /// first gives Poisson(2λ), and the returned sum of rates is theirs.
     #[test]
     fn poisson_counts_follow_each_rate() {
@@ -800,7 +626,8 @@ mod tests {
                 } else {
                     &mut extra
                 };
-                let (total, rate_sum) = poisson_counts(simd, into, &w, 1.0, &mut lanes, &mut rng);
+                let (total, rate_sum) =
+                    poisson_counts(simd, into, &w, Rates::Scaled(1.0), &mut lanes, &mut rng);
                 assert_eq!(total, into.to_vec().iter().sum::<usize>());
                 let want: f64 = w.iter().sum();
                 assert!(
@@ -830,7 +657,8 @@ mod tests {
     /// Every kernel gives the same counts, totals and sums of rates, draw for draw: rates
     /// around the escape threshold and far beyond it (counts of `Counts::BIG` and more),
     /// zero, negative, NaN and infinite weights, groups that continue, and lengths that end
-    /// inside a block or a group. Then the same lanes and generator go on alike.
+    /// inside a block or a group; and residual rates, from weights whose `M·W_j` fall on,
+    /// just below and just above integers. Then the same lanes and generator go on alike.
     #[test]
     fn every_kernel_counts_the_same() {
         let specials = [
@@ -855,19 +683,34 @@ mod tests {
                     r => (r as f64 / 2.6).powi(2),
                 })
                 .collect();
-            let run = |simd| {
+            let mf = n as f64;
+            let residual: Vec<f64> = (0..n)
+                .map(|j| match j % 5 {
+                    0 => 3.0 / mf,
+                    1 => (3.0 - 1e-12) / mf,
+                    2 => (3.0 + 1e-12) / mf,
+                    _ => ((j * 37 % 101) as f64 / 101.0).powi(3),
+                })
+                .collect();
+            let run = |simd, w: &[f64], rates| {
                 let mut rng = stream_rng(21, case as u64);
                 let mut lanes = LaneRng::from_rng(&mut rng);
                 let mut counts = Counts::new();
-                let (t, rates) = poisson_counts(simd, &mut counts, &w, 1.3, &mut lanes, &mut rng);
+                let (t, sum) = poisson_counts(simd, &mut counts, w, rates, &mut lanes, &mut rng);
                 let mut after = [0u64; LANES];
                 lanes.step(&mut after);
-                (counts.to_vec(), t, rates.to_bits(), after, rng.next_u64())
+                (counts.to_vec(), t, sum.to_bits(), after, rng.next_u64())
             };
-            let auto = run(Simd::Auto);
-            assert!(auto.0.iter().any(|&c| c >= usize::from(Counts::BIG)) || n < 13 * 8);
-            assert_eq!(auto, run(Simd::Avx2), "N = {n}");
-            assert_eq!(auto, run(Simd::Portable), "N = {n}");
+            for (w, rates) in [
+                (&w, Rates::Scaled(1.3)),
+                (&residual, Rates::Residuals { a: mf, b: 1.7 }),
+            ] {
+                let auto = run(Simd::Auto, w, rates);
+                assert_eq!(auto, run(Simd::Avx2, w, rates), "N = {n}, {rates:?}");
+                assert_eq!(auto, run(Simd::Portable, w, rates), "N = {n}, {rates:?}");
+            }
+            let big = run(Simd::Auto, &w, Rates::Scaled(1.3)).0;
+            assert!(big.iter().any(|&c| c >= usize::from(Counts::BIG)) || n < 13 * 8);
         }
     }
 

@@ -10,6 +10,7 @@
 //! The counts equal the portable kernel's (tested in `poisson`).
 
 use super::counts::Counts;
+use super::poisson::Rates;
 use crate::simd::LaneRng;
 use crate::simd::avx512::Avx512;
 use rand::Rng;
@@ -20,7 +21,7 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
     cpu: Avx512,
     counts: &mut Counts,
     w: &[f64],
-    scale: f64,
+    rates: Rates,
     lanes: &mut LaneRng,
     rng: &mut R,
 ) -> (usize, f64) {
@@ -28,15 +29,20 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
     {
         let _ = cpu;
         // SAFETY: the token exists only where run-time detection found the features the
-        // kernel is compiled with.
+        // kernels are compiled with.
         #[allow(unsafe_code)]
         unsafe {
-            x86::poisson_counts(counts, w, scale, lanes, rng)
+            match rates {
+                Rates::Scaled(a) => x86::poisson_counts::<false, R>(counts, w, a, 0.0, lanes, rng),
+                Rates::Residuals { a, b } => {
+                    x86::poisson_counts::<true, R>(counts, w, a, b, lanes, rng)
+                }
+            }
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let _ = (counts, w, scale, lanes, rng);
+        let _ = (counts, w, rates, lanes, rng);
         cpu.unreachable()
     }
 }
@@ -44,7 +50,7 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::super::counts::Counts;
-    use super::super::poisson::{INV_FACTORIAL, MAX_TERM, RATE_INVERT, TERMS, escape, rate_of};
+    use super::super::poisson::{INV_FACTORIAL, MAX_TERM, RATE_INVERT, Rates, TERMS, escape};
     use crate::simd::avx512::x86::{
         exp_fma8, exp_table, lanes_epi64, lanes_pd, load_pd, step8, unit8,
     };
@@ -55,23 +61,31 @@ mod x86 {
     /// Groups of eight particles taken side by side.
     const G: usize = 4;
 
+    /// The kernel for [`Rates::Scaled`]`(a)`, or with `RESIDUALS` for
+    /// [`Rates::Residuals`]` { a, b }`.
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
-    pub(super) fn poisson_counts<R: Rng + ?Sized>(
+    pub(super) fn poisson_counts<const RESIDUALS: bool, R: Rng + ?Sized>(
         counts: &mut Counts,
         w: &[f64],
-        scale: f64,
+        a: f64,
+        b: f64,
         lanes: &mut LaneRng,
         rng: &mut R,
     ) -> (usize, f64) {
+        let rates = if RESIDUALS {
+            Rates::Residuals { a, b }
+        } else {
+            Rates::Scaled(a)
+        };
         let table = exp_table();
         let (zero, one) = (_mm512_setzero_pd(), _mm512_set1_pd(1.0));
         let ones = _mm512_set1_epi64(1);
-        let mut rates = zero;
+        let mut sums = zero;
         let mut inverted = _mm512_setzero_si512();
         let mut total = 0usize;
         let mut wpad = [0.0f64; LANES];
-        for (b, wb) in w.chunks(LANES).enumerate() {
-            let (j0, len) = (b * LANES, wb.len());
+        for (blk, wb) in w.chunks(LANES).enumerate() {
+            let (j0, len) = (blk * LANES, wb.len());
             // A partial last block: the lanes past the weights get rate 0 (count 0), and
             // every lane steps, as in the portable kernel.
             let wb = if len == LANES {
@@ -88,11 +102,20 @@ mod x86 {
                 let bits: [__m512i; G] = std::array::from_fn(|q| step8(lanes.state(), g0 + q));
                 let lam: [__m512d; G] = std::array::from_fn(|q| {
                     let x = load_pd(&wb[8 * (g0 + q)..8 * (g0 + q + 1)]);
-                    // `max(x, 0)` returns its second operand unless `x > 0`: `rate_of`.
-                    _mm512_max_pd(_mm512_mul_pd(_mm512_set1_pd(scale), x), zero)
+                    let x = _mm512_mul_pd(_mm512_set1_pd(a), x);
+                    if RESIDUALS {
+                        // `x − ⌊x⌋` (the rounding is exact, as `floor_index`'s), times `b`.
+                        let f = _mm512_roundscale_pd::<{ _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC }>(
+                            x,
+                        );
+                        _mm512_mul_pd(_mm512_sub_pd(x, f), _mm512_set1_pd(b))
+                    } else {
+                        // `max(x, 0)` returns its second operand unless `x > 0`: `rate_of`.
+                        _mm512_max_pd(x, zero)
+                    }
                 });
                 for l in lam {
-                    rates = _mm512_add_pd(rates, l);
+                    sums = _mm512_add_pd(sums, l);
                 }
                 let esc: [__mmask8; G] = std::array::from_fn(|q| {
                     _mm512_cmp_pd_mask::<_CMP_GT_OQ>(lam[q], _mm512_set1_pd(RATE_INVERT))
@@ -144,13 +167,13 @@ mod x86 {
             }
             if escaped != 0 {
                 let lam: [f64; LANES] =
-                    std::array::from_fn(|q| if q < len { rate_of(scale * wb[q]) } else { 0.0 });
+                    std::array::from_fn(|q| if q < len { rates.of(wb[q]) } else { 0.0 });
                 total = total.saturating_add(escape(counts, escaped, j0, &lam, rng));
             }
         }
         let inverted: u64 = lanes_epi64(inverted).iter().sum();
-        let rates: f64 = lanes_pd(rates).iter().sum();
-        (total.saturating_add(inverted as usize), rates)
+        let sums: f64 = lanes_pd(sums).iter().sum();
+        (total.saturating_add(inverted as usize), sums)
     }
 
     /// `poisson::continue_terms` for one group of eight.

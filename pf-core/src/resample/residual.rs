@@ -1,8 +1,8 @@
 //! Residual resampling: deterministic copies, then multinomial on what is left, drawn per
-//! particle by thinning a Poisson process.
+//! particle from Poisson counts.
 
 use super::Resample;
-use super::poisson::{DrawBuffers, Thresholds, distinct_sorted, round_mean, thin, write_runs};
+use super::poisson::{DrawBuffers, Rates, distinct_sorted, poisson_counts, round_mean, write_runs};
 use crate::simd::math::floor_index;
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::Rng;
@@ -16,23 +16,22 @@ use std::cell::RefCell;
 /// Every `r_j` is below 1, so the `R` draws can be made per particle in O(N), with no
 /// points to place or search:
 ///
-/// 1. **Poissonisation by thinning.** Particle `j` gets a Poisson(`Λ`) number of
-///    candidates, each kept with probability `r_j`: a Poisson(`Λ·r_j`) count, independent
-///    across particles. `Λ·R = R + 3√R + 1`, so that the total `T`, Poisson(`Λ·R`), falls
-///    short of `R` with probability about 10⁻³; then further rounds add counts
-///    (independent Poisson counts add up to Poisson counts).
-/// 2. **Conditioning on `R`.** Given `T`, the kept candidates are `T` independent draws from
+/// 1. **Poissonisation.** Particle `j` gets a Poisson(`Λ·r_j`) count, independent across
+///    particles. `Λ·R = R + 3√R + 1`, so that the total `T`, Poisson(`Λ·R`), falls short of
+///    `R` with probability about 10⁻³; then further rounds add counts (independent Poisson
+///    counts add up to Poisson counts).
+/// 2. **Conditioning on `R`.** Given `T`, the counted draws are `T` independent draws from
 ///    `r/R`; a uniformly chosen subset of `T − R` of them (about `3√R`, from the caller's
 ///    generator) is removed, which leaves `R` independent draws.
 /// 3. **Ancestors.** Each particle's copies and kept draws are written as one run, so the
 ///    ancestors come out in increasing order.
 ///
-/// Each particle's candidate count (inversion against thresholds computed once per call,
-/// exact to 2⁻⁵³ per outcome) and one uniform that inverts the Binomial number kept among
-/// up to three candidates come from a [`LaneRng`] seeded from the caller's generator, one
-/// lane step each per 64 particles; a particle with four candidates or more (2 %) thins
-/// them one by one on the caller's generator. The joint law of the offspring counts is
-/// tested by chi-square, and so are the thinned counts of each path.
+/// The counts are the inversion of multinomial resampling's (`poisson_counts`, one lane
+/// uniform per particle and no search), with the rate `Λ·r_j ≤ 1` computed from each weight
+/// as it is read. They replaced a Poisson(`Λ`) number of candidates thinned with
+/// probability `r_j` (the same law, two lane draws per particle), which took 3.1–3.4 of the
+/// scheme's 6.0–6.3 ns per particle (performance log, 2026-11-27). The joint law of the
+/// offspring counts is tested by chi-square.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Residual;
 
@@ -42,7 +41,8 @@ impl Resample for Residual {
     }
 }
 
-/// Largest candidate rate of a round (the thresholds are built for rates up to 4).
+/// Largest rate `Λ` of a round (a block whose residual mass is far below its share of the
+/// draws takes several rounds rather than rates far above 1).
 const MAX_RATE: f64 = 4.0;
 
 thread_local! {
@@ -179,10 +179,6 @@ pub(crate) fn residual_draws<R: Rng + ?Sized>(
         (scale, (rf - mass * scale).max(0.0), rf)
     };
     let floor = |j: usize| floor_index(mf * w[j]).0;
-    let keep = |j: usize| {
-        let x = mf * w[j];
-        (x - floor_index(x).1) * scale
-    };
     let mut lanes = (r > 0).then(|| LaneRng::from_rng(rng));
     SCRATCH.with(|cell| {
         let DrawBuffers {
@@ -200,18 +196,16 @@ pub(crate) fn residual_draws<R: Rng + ?Sized>(
                 let mut rate = (round_mean(r) / keep_total).min(MAX_RATE);
                 let mut first_round = true;
                 while t < r {
-                    let th = Thresholds::new(rate);
                     let round = if first_round {
                         &mut *counts
                     } else {
                         &mut *extra
                     };
-                    round.reset(n);
-                    t += dispatch(
-                        simd,
-                        #[inline(always)]
-                        || thin(round, &th, &keep, lanes, rng),
-                    );
+                    let rates = Rates::Residuals {
+                        a: mf,
+                        b: scale * rate,
+                    };
+                    t += poisson_counts(simd, round, w, rates, lanes, rng).0;
                     if let Ok(more) = Poisson::new(rate * e) {
                         let more = more.sample(rng) as usize;
                         round.add_to(n - 1, more);
