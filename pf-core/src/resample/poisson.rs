@@ -89,14 +89,6 @@ pub(crate) const RATE_INVERT: f64 = 12.0;
 /// A cap on one count, far above any that resampling into memory can ask for.
 const MAX_COUNT: usize = 1 << 40;
 
-/// Terms of the inversion compared on every particle; the particles of a group of eight
-/// still above the last continue term by term (see [`poisson_counts`]). Eight suit rates
-/// around 1 with a tail to 5, the benchmark's weights: with six, a quarter of the groups
-/// continued, and the mispredicted exits cost more than two terms more for everyone (AVX-512
-/// counts, 3.45 against 1.82 ns per particle; nine terms 1.81, ten 2.3, twelve 3.3;
-/// performance log, 2026-11-27).
-pub(crate) const TERMS: usize = 8;
-
 /// The last term of an inversion: for `λ ≤ 12` the sum stops moving long before (its terms
 /// fall below 2⁻⁵³ of it from about the 50th), and `P(N > 127) < 10⁻⁶⁰`.
 pub(crate) const MAX_TERM: usize = 127;
@@ -135,6 +127,21 @@ impl Rates {
             }
         }
     }
+
+    /// The terms of the inversion compared on every particle for these rates; the particles
+    /// of a group of eight still above the last continue term by term (see
+    /// [`poisson_counts`]). Eight suit multinomial rates around 1 with a tail to 5, the
+    /// benchmark's weights: with six, a quarter of the groups continued, and the
+    /// mispredicted exits cost more than two terms more for everyone (AVX-512 counts, 3.45
+    /// against 1.82 ns per particle; nine terms 1.81, ten 2.3, twelve 3.3; scratch harness,
+    /// 2026-11-27). Residual rates are at most about 1, where five leave `P(N ≥ 5) < 0.4 %`
+    /// per particle.
+    pub(crate) const fn terms(self) -> usize {
+        match self {
+            Rates::Scaled(_) => 8,
+            Rates::Residuals { .. } => 5,
+        }
+    }
 }
 
 /// `counts[j] ←` a Poisson(`λ_j`) count, `λ_j` from `w_j` by `rates` (see [`Rates`]),
@@ -147,7 +154,7 @@ impl Rates {
 /// which is `u ≥ P(N ≤ i)` multiplied through by `e^λ`. The partial sums take one multiply
 /// (`λ^i = λ^{i−1}·λ`) and one fused multiply-add (`S_i = λ^i·(1/i!) + S_{i−1}`) per term,
 /// and no division: `e^λ` comes once per particle from [`exp_fma`](crate::simd::math::exp_fma).
-/// The first [`TERMS`] are compared on every particle; a group of eight particles some of
+/// The first [`Rates::terms`] are compared on every particle; a group of eight particles some of
 /// which are still at or above the last sum continues a term at a time until none is, a
 /// particle stopping where `U < S_i`, or where the sum no longer moves past the mode
 /// (`i > λ`, `S_i = S_{i−1}`: the tail left is below 2⁻⁵² and `U` sits in it only through
@@ -169,16 +176,23 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
     if let Some(cpu) = Avx512::get(simd) {
         return super::poisson_avx512::poisson_counts(cpu, counts, w, rates, lanes, rng);
     }
-    dispatch(
-        simd,
-        #[inline(always)]
-        || poisson_counts_portable(counts, w, rates, lanes, rng),
-    )
+    match rates.terms() {
+        8 => dispatch(
+            simd,
+            #[inline(always)]
+            || poisson_counts_portable::<8, R>(counts, w, rates, lanes, rng),
+        ),
+        _ => dispatch(
+            simd,
+            #[inline(always)]
+            || poisson_counts_portable::<5, R>(counts, w, rates, lanes, rng),
+        ),
+    }
 }
 
 /// The portable body of [`poisson_counts`].
 #[inline(always)]
-fn poisson_counts_portable<R: Rng + ?Sized>(
+fn poisson_counts_portable<const T: usize, R: Rng + ?Sized>(
     counts: &mut Counts,
     w: &[f64],
     rates: Rates,
@@ -204,7 +218,7 @@ fn poisson_counts_portable<R: Rng + ?Sized>(
                 *r += l;
             }
         }
-        let escaped = poisson_block(&lam, &bits, &mut k);
+        let escaped = poisson_block::<T>(&lam, &bits, &mut k);
         for (c, &k) in counts.small[j0..j0 + len].iter_mut().zip(&k) {
             *c = k as u8;
         }
@@ -225,7 +239,11 @@ pub(crate) fn rate_of(x: f64) -> f64 {
 /// The inversion counts of one block, `k[q]` for rate `lam[q]` and draw `bits[q]`, and the
 /// mask of the lanes whose rate is above [`RATE_INVERT`] (their `k` is 0, for [`escape`]).
 #[inline(always)]
-fn poisson_block(lam: &[f64; LANES], bits: &[u64; LANES], k: &mut [u64; LANES]) -> u64 {
+fn poisson_block<const T: usize>(
+    lam: &[f64; LANES],
+    bits: &[u64; LANES],
+    k: &mut [u64; LANES],
+) -> u64 {
     let e = exp_fma_lanes(*lam);
     let u: [f64; LANES] = std::array::from_fn(|q| unit_from_bits(bits[q]) * e[q]);
     let mut escaped = 0u64;
@@ -246,7 +264,7 @@ fn poisson_block(lam: &[f64; LANES], bits: &[u64; LANES], k: &mut [u64; LANES]) 
         let mut s: [f64; 8] = std::array::from_fn(|l| 1.0 + lam[l]);
         let mut ge: [bool; 8] = std::array::from_fn(|l| u[l] >= s[l]);
         *k = std::array::from_fn(|l| u64::from(u[l] >= 1.0));
-        for &c in &INV_FACTORIAL[2..TERMS] {
+        for &c in &INV_FACTORIAL[2..T] {
             for l in 0..8 {
                 k[l] += u64::from(ge[l]);
                 pw[l] *= lam[l];
@@ -261,7 +279,7 @@ fn poisson_block(lam: &[f64; LANES], bits: &[u64; LANES], k: &mut [u64; LANES]) 
         }
         more &= !((escaped >> (8 * g)) as u8);
         if more != 0 {
-            continue_terms(k, lam, u, pw, s, more);
+            continue_terms(T, k, lam, u, pw, s, more);
         }
     }
     for q in set_bits(escaped) {
@@ -270,11 +288,12 @@ fn poisson_block(lam: &[f64; LANES], bits: &[u64; LANES], k: &mut [u64; LANES]) 
     escaped
 }
 
-/// The inversion continued from term [`TERMS`] for the lanes in `more`, which are at or above
+/// The inversion continued from term `from` for the lanes in `more`, which are at or above
 /// the sum `s` (`pw` the last power), until none is (see [`poisson_counts`]).
 #[cold]
 #[inline(never)]
 fn continue_terms(
+    from: usize,
     k: &mut [u64; 8],
     lam: &[f64; 8],
     u: &[f64; 8],
@@ -282,7 +301,7 @@ fn continue_terms(
     mut s: [f64; 8],
     mut more: u8,
 ) {
-    for (i, &c) in INV_FACTORIAL.iter().enumerate().skip(TERMS) {
+    for (i, &c) in INV_FACTORIAL.iter().enumerate().skip(from) {
         if more == 0 {
             break;
         }
@@ -723,13 +742,13 @@ mod tests {
             let mut pw = lanes;
             let mut s = [1.0 + lam; 8];
             let mut k = [0u64; 8];
-            for &c in &INV_FACTORIAL[2..TERMS] {
+            for &c in &INV_FACTORIAL[2..8] {
                 for l in 0..8 {
                     pw[l] *= lam;
                     s[l] = pw[l].mul_add(c, s[l]);
                 }
             }
-            continue_terms(&mut k, &lanes, &u, pw, s, 0xff);
+            continue_terms(8, &mut k, &lanes, &u, pw, s, 0xff);
             assert!(
                 k.iter().all(|&k| (k as f64) < lam + 40.0),
                 "λ = {lam}: {k:?}"

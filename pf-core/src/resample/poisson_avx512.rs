@@ -50,7 +50,7 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::super::counts::Counts;
-    use super::super::poisson::{INV_FACTORIAL, MAX_TERM, RATE_INVERT, Rates, TERMS, escape};
+    use super::super::poisson::{INV_FACTORIAL, MAX_TERM, RATE_INVERT, Rates, escape};
     use crate::simd::avx512::x86::{
         exp_fma8, exp_table, lanes_epi64, lanes_pd, load_pd, step8, unit8,
     };
@@ -77,6 +77,7 @@ mod x86 {
         } else {
             Rates::Scaled(a)
         };
+        let terms = rates.terms();
         let table = exp_table();
         let (zero, one) = (_mm512_setzero_pd(), _mm512_set1_pd(1.0));
         let ones = _mm512_set1_epi64(1);
@@ -129,7 +130,7 @@ mod x86 {
                 });
                 let mut ge: [__mmask8; G] =
                     std::array::from_fn(|q| _mm512_cmp_pd_mask::<_CMP_GE_OQ>(u[q], s[q]));
-                for &c in &INV_FACTORIAL[2..TERMS] {
+                for &c in &INV_FACTORIAL[2..terms] {
                     let c = _mm512_set1_pd(c);
                     for q in 0..G {
                         k[q] = _mm512_mask_add_epi64(k[q], ge[q], k[q], ones);
@@ -142,7 +143,7 @@ mod x86 {
                     k[q] = _mm512_mask_add_epi64(k[q], ge[q], k[q], ones);
                     let more = ge[q] & !esc[q];
                     if more != 0 {
-                        k[q] = continue_terms(k[q], lam[q], u[q], pw[q], s[q], more);
+                        k[q] = continue_terms(terms, k[q], lam[q], u[q], pw[q], s[q], more);
                     }
                     k[q] = _mm512_maskz_mov_epi64(!esc[q], k[q]);
                     inverted = _mm512_add_epi64(inverted, k[q]);
@@ -181,6 +182,7 @@ mod x86 {
     #[inline(never)]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     fn continue_terms(
+        from: usize,
         mut k: __m512i,
         lam: __m512d,
         u: __m512d,
@@ -193,7 +195,7 @@ mod x86 {
             .iter()
             .enumerate()
             .take(MAX_TERM + 1)
-            .skip(TERMS)
+            .skip(from)
         {
             if more == 0 {
                 break;
