@@ -588,7 +588,7 @@ fn byte_sum(bytes: &[u8; SCAN]) -> (usize, bool) {
 mod tests {
     use super::*;
     use crate::mc::{PfRng, stream_rng};
-    use crate::simd::{Simd, dispatch};
+    use crate::simd::Simd;
     use crate::testing::{chi2_quantile_999, pearson_pooled, poisson_pmf};
 
     /// equally likely to be chosen (chi-square over 8 cells, 7 df, P(χ² > 24.3) = 0.001).

@@ -5,7 +5,7 @@
 //! selects instead of branches). `dispatch` compiles it twice: once for the baseline
 //! target, and once inside a function with `#[target_feature(enable = "avx2,fma")]`, chosen
 //! at run time when the CPU has both. A few kernels on the hottest paths also have an
-//! AVX-512 twin written with `core::arch` intrinsics (see [`avx512`](self::avx512)), chosen
+//! AVX-512 twin written with `core::arch` intrinsics (see the private module `avx512`), chosen
 //! at run time when the CPU has AVX-512.
 //!
 //! All copies perform the same IEEE-754 operations in the same order: Rust never contracts
