@@ -150,11 +150,15 @@ pub(crate) mod x86 {
         let nf = _mm512_sub_pd(t, magic);
         let r = _mm512_fnmadd_pd(nf, _mm512_set1_pd(LN2_HI / 16.0), x);
         let r = _mm512_fnmadd_pd(nf, _mm512_set1_pd(LN2_LO / 16.0), r);
-        let mut p = _mm512_set1_pd(EXP_TAYLOR[0]);
-        for &c in &EXP_TAYLOR[1..] {
-            p = _mm512_fmadd_pd(p, r, _mm512_set1_pd(c));
-        }
-        let p = _mm512_mul_pd(p, r);
+        let [a6, a5, a4, a3, a2, a1, a0] = EXP_TAYLOR.map(|c| _mm512_set1_pd(c));
+        let r2 = _mm512_mul_pd(r, r);
+        let r4 = _mm512_mul_pd(r2, r2);
+        let q0 = _mm512_fmadd_pd(r, a1, a0);
+        let q1 = _mm512_fmadd_pd(r, a3, a2);
+        let q2 = _mm512_fmadd_pd(r, a5, a4);
+        let s0 = _mm512_fmadd_pd(r2, q1, q0);
+        let s1 = _mm512_fmadd_pd(r2, a6, q2);
+        let p = _mm512_mul_pd(_mm512_fmadd_pd(r4, s1, s0), r);
         let bits = _mm512_castpd_si512(t);
         let k = _mm512_srai_epi64::<4>(_mm512_sub_epi64(bits, _mm512_castpd_si512(magic)));
         // The permute reads the low four bits of each index: `bits & 15`.
