@@ -73,7 +73,7 @@ pub(crate) fn prefetch<T>(p: *const T, len: usize) {
         };
         for i in 0..lines {
             let line = p.cast::<i8>().wrapping_add(64 * i);
-            // The crate's second `unsafe` block. SAFETY: `_mm_prefetch` is `unsafe` only
+            // SAFETY: `_mm_prefetch` is `unsafe` only
             // because it is declared for the `sse` target feature, which every x86-64 CPU
             // has (it is part of the baseline). The instruction is a hint: it dereferences
             // nothing the program sees and cannot fault on any address.
