@@ -34,7 +34,8 @@ pub enum Simd {
     Avx2,
     /// Always the portable copy (baseline x86-64: SSE2), for comparison and audits. Kernels
     /// with fused multiply-adds compute them in the C library's `fma` here, which is exact
-    /// but slow.
+    /// but slow: the batch filter with multinomial resampling took 50 against 10 ns per
+    /// particle-step at N = 10⁴ (2026-11-27).
     Portable,
 }
 
