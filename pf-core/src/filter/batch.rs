@@ -42,6 +42,7 @@ use crate::resample::{
     BLOCK, BlockPlan, Blocked, ChunkSplit, ChunkedWeights, Resampler, SCAN, chunks_per_block,
     prefix4_each, stratified_index_in,
 };
+use crate::simd::avx512::Avx512;
 use crate::simd::math::{ceil_index_in, exp_nonpositive, exp_nonpositive_lanes};
 use crate::simd::{LaneRng, Simd, dispatch, prefetch};
 use rand::RngExt;
@@ -255,6 +256,8 @@ struct StepCtx<'a, M> {
     /// prefetches for the next one only within its own group.
     prefetch: bool,
     per_group: usize,
+    /// The AVX-512 twins, where the configuration allows them and the CPU has AVX-512.
+    avx512: Option<Avx512>,
 }
 
 /// From this many particles (the four state and weight arrays then span 8 MiB or more) each
@@ -472,6 +475,7 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             keep_lw: !matches!(self.cfg.policy, ResamplePolicy::Always),
             prefetch: n >= self.prefetch_min,
             per_group,
+            avx512: Avx512::get(self.cfg.simd),
         };
         let simd = self.cfg.simd;
         type GroupWork<'a> = (
@@ -719,34 +723,39 @@ fn chunk_step<M: ScalarModel>(
     } else {
         0
     };
-    let mut blocks = l.chunks_exact_mut(EXP_LANES);
-    if next_len == 0 {
-        // A loop of its own, so that the prefetches leave the in-cache case's code as it was.
-        for b in &mut blocks {
-            exp_block(b, shift);
-        }
+    if let (Some(cpu), 0) = (ctx.avx512, next_len) {
+        // All of them on the AVX-512 twin, whose table lookups are permutes in registers.
+        cpu.exp_nonpositive_shifted(l, shift);
     } else {
-        for (i, b) in (&mut blocks).enumerate() {
-            let o = i * EXP_LANES;
-            if o < next_len {
-                let k = EXP_LANES.min(next_len - o);
-                prefetch(xs.as_ptr().wrapping_add(len + o), k);
-                prefetch(cws.as_ptr().wrapping_add(len + o), k);
-                if ctx.keep_lw {
-                    prefetch(lws.as_ptr().wrapping_add(len + o), k);
-                }
-                if let Source::Identity = ctx.source {
-                    // Without resampling, the next chunk reads these at its own indices.
-                    let a = lo + len + o;
-                    prefetch(ctx.x_old[a..a + k].as_ptr(), k);
-                    prefetch(ctx.lw_old[a..a + k].as_ptr(), k);
-                }
+        let mut blocks = l.chunks_exact_mut(EXP_LANES);
+        if next_len == 0 {
+            // A loop of its own, so that the prefetches leave the in-cache code as it was.
+            for b in &mut blocks {
+                exp_block(b, shift);
             }
-            exp_block(b, shift);
+        } else {
+            for (i, b) in (&mut blocks).enumerate() {
+                let o = i * EXP_LANES;
+                if o < next_len {
+                    let k = EXP_LANES.min(next_len - o);
+                    prefetch(xs.as_ptr().wrapping_add(len + o), k);
+                    prefetch(cws.as_ptr().wrapping_add(len + o), k);
+                    if ctx.keep_lw {
+                        prefetch(lws.as_ptr().wrapping_add(len + o), k);
+                    }
+                    if let Source::Identity = ctx.source {
+                        // Without resampling, the next chunk reads these at its own indices.
+                        let a = lo + len + o;
+                        prefetch(ctx.x_old[a..a + k].as_ptr(), k);
+                        prefetch(ctx.lw_old[a..a + k].as_ptr(), k);
+                    }
+                }
+                exp_block(b, shift);
+            }
         }
-    }
-    for v in blocks.into_remainder() {
-        *v = exp_nonpositive(*v - shift);
+        for v in blocks.into_remainder() {
+            *v = exp_nonpositive(*v - shift);
+        }
     }
     let mut sq4 = [0.0; 4];
     let sum = prefix4_each(l, 0.0, cws, |w| {
@@ -1071,6 +1080,7 @@ mod tests {
                     keep_lw: false,
                     prefetch: false,
                     per_group: 1,
+                    avx512: None,
                 };
                 // G_j N/T, from the global cumulative weights.
                 let pos: Vec<f64> = (0..n)

@@ -74,7 +74,7 @@ pub fn exp_nonpositive_lanes<const L: usize>(x: [f64; L]) -> [f64; L] {
 
 /// `2^{j/64}` for `j = 0 … 63`, each the double nearest the exact value (computed with
 /// 60-digit decimal arithmetic; a test checks them against `exp2`).
-const EXP2_64THS: [u64; 64] = [
+pub(crate) const EXP2_64THS: [u64; 64] = [
     0x3ff0000000000000,
     0x3ff02c9a3e778061,
     0x3ff059b0d3158574,
