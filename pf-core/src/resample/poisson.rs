@@ -1,7 +1,7 @@
 //! The Poisson machinery of the O(N) multinomial draws: counts with a rate per particle
 //! (multinomial and residual resampling), the uniformly chosen draws removed when
 //! conditioning a Poisson total, and the runs of ancestors they leave.
-//! The counts and the runs have AVX-512 twins in [`poisson_avx512`](super::poisson_avx512).
+//! The counts have an AVX-512 twin in [`poisson_avx512`](super::poisson_avx512).
 
 use super::counts::Counts;
 use super::offspring::{Runs, SCAN};
@@ -132,8 +132,9 @@ impl Rates {
     /// of a group of eight still above the last continue term by term (see
     /// [`poisson_counts`]). Eight suit multinomial rates around 1 with a tail to 5, the
     /// benchmark's weights: with six, a quarter of the groups continued, and the
-    /// mispredicted exits cost more than two terms more for everyone (AVX-512 counts, 3.45
-    /// against 1.82 ns per particle; nine terms 1.81, ten 2.3, twelve 3.3; scratch harness,
+    /// mispredicted exits cost more than two terms more for everyone (AVX-512 counts before
+    /// the fused sums, ns per particle: six terms 3.42, seven 2.78, eight 2.59, nine 2.57,
+    /// ten 2.77, twelve 3.30; with them, seven 1.99, eight 1.82, nine 1.81; scratch harness,
     /// 2026-11-27). Residual rates are at most about 1, where five leave `P(N ≥ 5) < 0.4 %`
     /// per particle.
     pub(crate) const fn terms(self) -> usize {

@@ -6,7 +6,7 @@
 //! groups of eight; each group steps its eight lanes of the [`LaneRng`] (the same draws as
 //! the portable lane step), and the four groups go through `exp`, the terms and the compares
 //! a step at a time, so that their chains of dependent operations overlap (one group at a
-//! time waited on latency: 2.5 against 2.3 ns per particle, scratch harness, 2026-11-27).
+//! time waited on latency: 2.6 against 2.3 ns per particle, scratch harness, 2026-11-27).
 //! The counts equal the portable kernel's (tested in `poisson`).
 
 use super::counts::Counts;
