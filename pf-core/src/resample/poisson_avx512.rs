@@ -61,6 +61,9 @@ mod x86 {
     /// Groups of eight particles taken side by side.
     const G: usize = 4;
 
+    /// The rounding of `vrndscalepd` that gives `⌊x⌋`.
+    const FLOOR: i32 = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
+
     /// The kernel for [`Rates::Scaled`]`(a)`, or with `RESIDUALS` for
     /// [`Rates::Residuals`]` { a, b }`.
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
@@ -106,9 +109,7 @@ mod x86 {
                     let x = _mm512_mul_pd(_mm512_set1_pd(a), x);
                     if RESIDUALS {
                         // `x − ⌊x⌋` (the rounding is exact, as `floor_index`'s), times `b`.
-                        let f = _mm512_roundscale_pd::<{ _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC }>(
-                            x,
-                        );
+                        let f = _mm512_roundscale_pd::<FLOOR>(x);
                         _mm512_mul_pd(_mm512_sub_pd(x, f), _mm512_set1_pd(b))
                     } else {
                         // `max(x, 0)` returns its second operand unless `x > 0`: `rate_of`.
