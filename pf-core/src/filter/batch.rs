@@ -635,7 +635,10 @@ fn chunk_step<M: ScalarModel>(
     let lo = d * ctx.c;
     let (model, t) = (ctx.model, ctx.t);
     let z = &mut s.z[..len];
-    rng.fill_normal_inline(z);
+    match ctx.avx512 {
+        Some(cpu) => cpu.fill_normal(rng, z),
+        None => rng.fill_normal_inline(z),
+    }
     // Propagate.
     match ctx.source {
         Source::Initial => {

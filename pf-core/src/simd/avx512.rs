@@ -6,7 +6,8 @@
 //! residual resampling; performance log, 2026-11-25): it keeps many-lane arrays in memory,
 //! looks tables up one lane at a time and lowers compares to mask-register shuffles. The
 //! twins keep eight particles per register, look the 16-entry `exp` table up with one
-//! permute, rotate with `vprolq` and count with masked adds.
+//! permute, rotate with `vprolq`, count with masked adds, and load a ziggurat candidate's two
+//! layer edges together.
 //!
 //! Each twin performs the same IEEE-754 operations, fused multiply-adds included, in the same
 //! order as its portable kernel, so the results are the same bits (tested against the
@@ -14,7 +15,7 @@
 //! the features they need; calling such a function is `unsafe` only because of the CPU
 //! requirement, which [`Avx512`] discharges once: it exists only after run-time detection.
 
-use super::Simd;
+use super::{LaneRng, Simd};
 
 /// Proof that the CPU runs the AVX-512 kernels: made only by [`Avx512::get`], after run-time
 /// detection, and taken by each safe wrapper of a kernel.
@@ -71,6 +72,24 @@ impl Avx512 {
         }
     }
 
+    /// Standard normals into `out` from `rng`: the twin of
+    /// [`LaneRng::fill_normal`](super::LaneRng::fill_normal) (the same draws, the same bits).
+    pub(crate) fn fill_normal(self, rng: &mut LaneRng, out: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: the token exists only where run-time detection found the features.
+            #[allow(unsafe_code)]
+            unsafe {
+                x86::fill_normal(rng, out)
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = (rng, out);
+            self.unreachable()
+        }
+    }
+
     /// Off x86-64 no token exists, so nothing that takes one can run.
     #[cfg(not(target_arch = "x86_64"))]
     pub(crate) fn unreachable(self) -> ! {
@@ -83,9 +102,12 @@ impl Avx512 {
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod x86 {
     use super::super::LANES;
+    use super::super::LaneRng;
+    use super::super::lanes::State;
     use super::super::math::{
         EXP_TAYLOR, EXP2_16THS, EXP2_64THS, LN2_HI, LN2_LO, ROUND_MAGIC, exp_nonpositive,
     };
+    use super::super::tables::{LAYERS, NORMAL};
     use std::arch::x86_64::*;
 
     /// The features every kernel is compiled with (the `target_feature` attributes repeat
@@ -244,6 +266,62 @@ pub(crate) mod x86 {
         for v in blocks.into_remainder() {
             *v = exp_nonpositive(*v - shift);
         }
+    }
+
+    /// One lane step and its standard normal candidates: the twin of the portable block
+    /// (`lanes::candidates` of `normal_candidate`), the same bits. Each candidate's layer
+    /// edges `x[i]` and `x[i+1]` are adjacent, so they come in one 16-byte load, and two
+    /// permutes sort eight such pairs into the two registers; Zen 4's gathers were slower
+    /// than the AVX2 copy's scalar loads (performance log, 2026-11-27).
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    fn normal_block(
+        s: &mut State,
+        x: &[f64; LAYERS + 1],
+        draws: &mut [u64; LANES],
+        c: &mut [f64; LANES],
+    ) -> u64 {
+        let even = _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14);
+        let odd = _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15);
+        let mut rejected = 0u64;
+        for g in 0..LANES / 8 {
+            let b = step8(s, g);
+            let bits = lanes_epi64(b);
+            draws[8 * g..8 * g + 8].copy_from_slice(&bits);
+            let edges = |l: usize| -> __m128d {
+                let i = bits[l] as usize & (LAYERS - 1);
+                let p: [f64; 2] = x[i..i + 2].try_into().expect("two edges");
+                bytemuck::cast(p)
+            };
+            let four = |l: usize| {
+                let v = _mm512_castpd128_pd512(edges(l));
+                let v = _mm512_insertf64x2::<1>(v, edges(l + 1));
+                let v = _mm512_insertf64x2::<2>(v, edges(l + 2));
+                _mm512_insertf64x2::<3>(v, edges(l + 3))
+            };
+            let (lo, hi) = (four(0), four(4));
+            let (xi, xi1) = (
+                _mm512_permutex2var_pd(lo, even, hi),
+                _mm512_permutex2var_pd(lo, odd, hi),
+            );
+            // `u ∈ [−1, 1)` from the top 52 bits, as `normal_parts`.
+            let two = _mm512_set1_epi64(0x4000_0000_0000_0000);
+            let u = _mm512_castsi512_pd(_mm512_or_si512(_mm512_srli_epi64::<12>(b), two));
+            let u = _mm512_sub_pd(u, _mm512_set1_pd(3.0));
+            let v = _mm512_mul_pd(u, xi);
+            let inside = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(_mm512_abs_pd(v), xi1);
+            let v = _mm512_mask_blend_pd(inside, _mm512_set1_pd(f64::NAN), v);
+            c[8 * g..8 * g + 8].copy_from_slice(&lanes_pd(v));
+            rejected |= u64::from(!inside) << (8 * g);
+        }
+        rejected
+    }
+
+    /// [`Avx512::fill_normal`](super::Avx512::fill_normal)'s body.
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    pub(super) fn fill_normal(rng: &mut LaneRng, out: &mut [f64]) {
+        let x = &NORMAL.x;
+        rng.fill_normal_blocks(out, |s, draws, c| normal_block(s, x, draws, c));
     }
 
     #[cfg(test)]

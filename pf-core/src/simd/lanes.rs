@@ -1,6 +1,7 @@
 //! [`LaneRng`]: 64 xoshiro256++ generators in lock-step, and vectorised ziggurat samplers
 //! on top of them.
 
+use super::avx512::Avx512;
 use super::math::exp_nonpositive;
 use super::tables::{EXPONENTIAL, LAYERS, NORMAL, Ziggurat};
 use super::{Simd, dispatch, set_bits};
@@ -33,6 +34,10 @@ pub const LANES: usize = 64;
 ///   is an exact draw from the target law and values in distinct slots are independent. The
 ///   wedge test's density comes from [`exp_nonpositive`] (within 2 ulp of libm's), which is
 ///   cheaper than a libm call on a path taken for about one candidate in a hundred.
+///   Where the CPU has AVX-512, [`fill_normal`](Self::fill_normal) makes the candidates on
+///   an intrinsic twin (eight lanes to a register, `vprolq` for the rotations, a
+///   candidate's two layer edges in one load): 1.00 against 1.22 ns per normal, the same
+///   bits.
 ///
 /// A call that fills `m` values consumes `⌈m / 64⌉` lane steps (a partial last step is
 /// discarded), so the values depend on how a stream is cut into calls, never on the thread
@@ -76,19 +81,7 @@ impl LaneRng {
     #[inline(always)]
     #[allow(clippy::manual_rotate)] // `rotate_left` was lowered to scalar `rol`s here
     pub(crate) fn step(&mut self, out: &mut [u64; LANES]) {
-        let [s0, s1, s2, s3] = &mut self.s;
-        for l in 0..LANES {
-            // Rotations as shift pairs: LLVM keeps those in vector registers.
-            let sum = s0[l].wrapping_add(s3[l]);
-            out[l] = ((sum << 23) | (sum >> 41)).wrapping_add(s0[l]);
-            let t = s1[l] << 17;
-            s2[l] ^= s0[l];
-            s3[l] ^= s1[l];
-            s1[l] ^= s2[l];
-            s0[l] ^= s3[l];
-            s2[l] ^= t;
-            s3[l] = (s3[l] << 45) ^ (s3[l] >> 19);
-        }
+        step(&mut self.s, out);
     }
 
     /// The lanes' state, `s[k][l]` word `k` of lane `l`: for the AVX-512 kernels, which step
@@ -115,6 +108,9 @@ impl LaneRng {
 
     /// [`fill_normal`](Self::fill_normal) on the chosen kernel (the numbers are the same).
     pub fn fill_normal_with(&mut self, simd: Simd, out: &mut [f64]) {
+        if let Some(cpu) = Avx512::get(simd) {
+            return cpu.fill_normal(self, out);
+        }
         dispatch(
             simd,
             #[inline(always)]
@@ -143,9 +139,25 @@ impl LaneRng {
         self.fill_ziggurat(
             out,
             #[inline(always)]
-            |b| normal_candidate(z, b),
+            |s, draws, c| {
+                step(s, draws);
+                candidates(c, draws, |b| normal_candidate(z, b))
+            },
             |b, rng| normal_continue(z, b, rng),
         );
+    }
+
+    /// The normal sampler with `block` for each lane step's candidates: for the AVX-512
+    /// twin, which steps the lanes and makes the candidates itself (the same bits as
+    /// [`fill_normal_inline`](Self::fill_normal_inline)).
+    #[inline(always)]
+    pub(crate) fn fill_normal_blocks(
+        &mut self,
+        out: &mut [f64],
+        block: impl FnMut(&mut State, &mut [u64; LANES], &mut [f64; LANES]) -> u64,
+    ) {
+        let z: &Ziggurat = &NORMAL;
+        self.fill_ziggurat(out, block, |b, rng| normal_continue(z, b, rng));
     }
 
     /// The exponential sampler's body, for callers already inside a dispatched kernel.
@@ -155,48 +167,77 @@ impl LaneRng {
         self.fill_ziggurat(
             out,
             #[inline(always)]
-            |b| exp1_candidate(z, b),
+            |s, draws, c| {
+                step(s, draws);
+                candidates(c, draws, |b| exp1_candidate(z, b))
+            },
             |b, rng| exp1_continue(z, b, rng),
         );
     }
 
-    /// One lane step per [`LANES`] values: its draws become candidates in place (NaN where a
-    /// candidate falls outside its rectangle), a bit mask marks those, and only the marked
-    /// ones are continued on the scalar stream, in order.
+    /// One lane step per [`LANES`] values: `block` steps the lanes into `draws` and makes
+    /// their candidates (NaN where a candidate falls outside its rectangle), returning a bit
+    /// mask of those; only the marked ones are continued on the scalar stream, in order.
     #[inline(always)]
     fn fill_ziggurat(
         &mut self,
         out: &mut [f64],
-        candidate: impl Fn(u64) -> f64,
+        mut block: impl FnMut(&mut State, &mut [u64; LANES], &mut [f64; LANES]) -> u64,
         continue_from: impl Fn(u64, &mut PfRng) -> f64,
     ) {
         let mut tail = [0.0f64; LANES];
         let mut draws = [0u64; LANES];
         for chunk in out.chunks_mut(LANES) {
-            self.step(&mut draws);
-            let fill = |c: &mut [f64]| {
-                let mut rejected = 0u64;
-                for (l, (c, &b)) in c.iter_mut().zip(draws.iter()).enumerate() {
-                    *c = candidate(b);
-                    rejected |= u64::from(c.is_nan()) << l;
-                }
-                rejected
-            };
             // A whole step runs on the output itself, a partial last one on `tail`: with the
             // length unknown to the compiler the candidate loop stops vectorising (76.7
             // against 65.2 instructions per particle-step in the filter, callgrind).
-            let len = chunk.len();
-            let rejected = if len == LANES {
-                fill(chunk)
-            } else {
-                let r = fill(&mut tail);
-                chunk.copy_from_slice(&tail[..len]);
-                r & ((1u64 << len) - 1)
+            let rejected = match <&mut [f64; LANES]>::try_from(&mut *chunk) {
+                Ok(whole) => block(&mut self.s, &mut draws, whole),
+                Err(_) => {
+                    let len = chunk.len();
+                    let r = block(&mut self.s, &mut draws, &mut tail);
+                    chunk.copy_from_slice(&tail[..len]);
+                    r & ((1u64 << len) - 1)
+                }
             };
             for p in set_bits(rejected) {
                 chunk[p] = continue_from(draws[p], &mut self.fix);
             }
         }
+    }
+}
+
+/// The lanes' state: `s[k][l]` is word `k` of lane `l`.
+pub(crate) type State = [[u64; LANES]; 4];
+
+/// The candidates of one lane step's `draws` into `c`, and the mask of those that are NaN
+/// (outside their rectangle).
+#[inline(always)]
+fn candidates(c: &mut [f64; LANES], draws: &[u64; LANES], candidate: impl Fn(u64) -> f64) -> u64 {
+    let mut rejected = 0u64;
+    for (l, (c, &b)) in c.iter_mut().zip(draws.iter()).enumerate() {
+        *c = candidate(b);
+        rejected |= u64::from(c.is_nan()) << l;
+    }
+    rejected
+}
+
+/// One lock-step xoshiro256++ step of the lanes' state `s` (see [`LaneRng::step`]).
+#[inline(always)]
+#[allow(clippy::manual_rotate)] // `rotate_left` was lowered to scalar `rol`s here
+fn step(s: &mut State, out: &mut [u64; LANES]) {
+    let [s0, s1, s2, s3] = s;
+    for l in 0..LANES {
+        // Rotations as shift pairs: LLVM keeps those in vector registers.
+        let sum = s0[l].wrapping_add(s3[l]);
+        out[l] = ((sum << 23) | (sum >> 41)).wrapping_add(s0[l]);
+        let t = s1[l] << 17;
+        s2[l] ^= s0[l];
+        s3[l] ^= s1[l];
+        s1[l] ^= s2[l];
+        s0[l] ^= s3[l];
+        s2[l] ^= t;
+        s3[l] = (s3[l] << 45) ^ (s3[l] >> 19);
     }
 }
 
@@ -305,22 +346,39 @@ mod tests {
         }
     }
 
-    /// The AVX2 copy and the portable copy produce the same bits (where the CPU has AVX2;
-    /// elsewhere both calls run the portable copy and the test is trivially true).
+    /// Every kernel produces the same bits: the AVX-512 twin of the normals (where the CPU
+    /// has AVX-512), the AVX2 copy (where it has AVX2) and the portable copy; on a CPU
+    /// without them the calls run the same copy and the test is trivially true. Ten
+    /// thousand normals hold about forty rejected candidates, continued on the scalar
+    /// stream.
     #[test]
-    fn avx2_and_portable_samplers_agree_bit_for_bit() {
-        for len in [1usize, 7, 8, 255, 256, 257, 10_000] {
+    fn every_kernel_gives_the_same_samples() {
+        for len in [1usize, 7, 8, 63, 255, 256, 257, 10_000] {
             let mut a = LaneRng::from_rng(&mut stream_rng(1, len as u64));
-            let mut b = a.clone();
-            let (mut za, mut zb) = (vec![0.0; len], vec![0.0; len]);
+            let (mut b, mut c) = (a.clone(), a.clone());
+            let (mut za, mut zb, mut zc) = (vec![0.0; len], vec![0.0; len], vec![0.0; len]);
             for _ in 0..3 {
                 a.fill_normal_with(Simd::Auto, &mut za);
-                b.fill_normal_with(Simd::Portable, &mut zb);
-                assert_eq!(bits_of(&za), bits_of(&zb), "normal, len {len}");
+                b.fill_normal_with(Simd::Avx2, &mut zb);
+                c.fill_normal_with(Simd::Portable, &mut zc);
+                assert_eq!(bits_of(&za), bits_of(&zc), "normal, len {len}");
+                assert_eq!(bits_of(&zb), bits_of(&zc), "normal, len {len}");
                 a.fill_exp1_with(Simd::Auto, &mut za);
-                b.fill_exp1_with(Simd::Portable, &mut zb);
-                assert_eq!(bits_of(&za), bits_of(&zb), "exp1, len {len}");
+                b.fill_exp1_with(Simd::Avx2, &mut zb);
+                c.fill_exp1_with(Simd::Portable, &mut zc);
+                assert_eq!(bits_of(&za), bits_of(&zc), "exp1, len {len}");
+                assert_eq!(bits_of(&zb), bits_of(&zc), "exp1, len {len}");
             }
+            // The streams are left in the same state.
+            let (mut ra, mut rc) = ([0u64; LANES], [0u64; LANES]);
+            a.step(&mut ra);
+            c.step(&mut rc);
+            assert_eq!(ra, rc, "lanes after len {len}");
+            assert_eq!(
+                a.fix.next_u64(),
+                c.fix.next_u64(),
+                "fix-up stream after len {len}"
+            );
         }
     }
 
