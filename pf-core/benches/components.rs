@@ -37,6 +37,7 @@ fn components(c: &mut Criterion) {
     let mut lanes = LaneRng::from_rng(&mut stream_rng(1, 1));
     for (name, simd) in [
         ("lanes_normal", Simd::Auto),
+        ("lanes_normal_avx2", Simd::Avx2),
         ("lanes_normal_portable", Simd::Portable),
     ] {
         group.bench_function(name, |b| {

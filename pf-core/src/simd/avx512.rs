@@ -143,7 +143,7 @@ pub(crate) mod x86 {
     /// outputs.
     #[inline]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
-    pub(crate) fn step8(s: &mut [[u64; LANES]; 4], g: usize) -> __m512i {
+    pub(crate) fn step8(s: &mut State, g: usize) -> __m512i {
         let r = 8 * g..8 * g + 8;
         let load = |w: &[u64; LANES]| -> __m512i {
             let a: [u64; 8] = w[r.clone()].try_into().expect("eight lanes");
@@ -279,7 +279,7 @@ pub(crate) mod x86 {
         s: &mut State,
         x: &[f64; LAYERS + 1],
         draws: &mut [u64; LANES],
-        c: &mut [f64; LANES],
+        c: &mut [f64],
     ) -> u64 {
         let even = _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14);
         let odd = _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15);
