@@ -726,38 +726,44 @@ fn chunk_step<M: ScalarModel>(
     } else {
         0
     };
-    if let (Some(cpu), 0) = (ctx.avx512, next_len) {
-        // All of them on the AVX-512 twin, whose table lookups are permutes in registers.
-        cpu.exp_nonpositive_shifted(l, shift);
-    } else {
-        let mut blocks = l.chunks_exact_mut(EXP_LANES);
-        if next_len == 0 {
-            // A loop of its own, so that the prefetches leave the in-cache code as it was.
-            for b in &mut blocks {
-                exp_block(b, shift);
+    // The next chunk's outputs (and, without resampling, its inputs), `k` values from offset
+    // `o` on.
+    let ahead = |o: usize| {
+        if o < next_len {
+            let k = EXP_LANES.min(next_len - o);
+            prefetch(xs.as_ptr().wrapping_add(len + o), k);
+            prefetch(cws.as_ptr().wrapping_add(len + o), k);
+            if ctx.keep_lw {
+                prefetch(lws.as_ptr().wrapping_add(len + o), k);
             }
-        } else {
-            for (i, b) in (&mut blocks).enumerate() {
-                let o = i * EXP_LANES;
-                if o < next_len {
-                    let k = EXP_LANES.min(next_len - o);
-                    prefetch(xs.as_ptr().wrapping_add(len + o), k);
-                    prefetch(cws.as_ptr().wrapping_add(len + o), k);
-                    if ctx.keep_lw {
-                        prefetch(lws.as_ptr().wrapping_add(len + o), k);
-                    }
-                    if let Source::Identity = ctx.source {
-                        // Without resampling, the next chunk reads these at its own indices.
-                        let a = lo + len + o;
-                        prefetch(ctx.x_old[a..a + k].as_ptr(), k);
-                        prefetch(ctx.lw_old[a..a + k].as_ptr(), k);
-                    }
-                }
-                exp_block(b, shift);
+            if let Source::Identity = ctx.source {
+                // Without resampling, the next chunk reads these at its own indices.
+                let a = lo + len + o;
+                prefetch(ctx.x_old[a..a + k].as_ptr(), k);
+                prefetch(ctx.lw_old[a..a + k].as_ptr(), k);
             }
         }
-        for v in blocks.into_remainder() {
-            *v = exp_nonpositive(*v - shift);
+    };
+    match (ctx.avx512, next_len) {
+        // On the AVX-512 twin, whose table lookups are permutes in registers.
+        (Some(cpu), 0) => cpu.exp_nonpositive_shifted(l, shift, |_| ()),
+        (Some(cpu), _) => cpu.exp_nonpositive_shifted(l, shift, ahead),
+        (None, _) => {
+            let mut blocks = l.chunks_exact_mut(EXP_LANES);
+            if next_len == 0 {
+                // A loop of its own, so that the prefetches leave the in-cache code as it was.
+                for b in &mut blocks {
+                    exp_block(b, shift);
+                }
+            } else {
+                for (i, b) in (&mut blocks).enumerate() {
+                    ahead(i * EXP_LANES);
+                    exp_block(b, shift);
+                }
+            }
+            for v in blocks.into_remainder() {
+                *v = exp_nonpositive(*v - shift);
+            }
         }
     }
     let mut sq4 = [0.0; 4];
