@@ -145,7 +145,7 @@ pub(crate) mod x86 {
         bytemuck::cast(v)
     }
 
-    /// One xoshiro256++ step of lanes `8g … 8g + 7` of a [`LaneRng`](super::super::LaneRng)'s
+    /// One xoshiro256++ step of lanes `8g … 8g + 7` of a [`LaneRng`]'s
     /// state (the same step as `LaneRng::step`, with `vprolq` for the rotations): their eight
     /// outputs.
     #[inline]

@@ -4,11 +4,11 @@
 //!
 //! | function | paper |
 //! |---|---|
-//! | [`cycle`] | Figs. 3–4: inputs, loading phases |
-//! | [`fig5_6`] | Figs. 5–6: simulated against estimated `Q_o`, `ρ_o` in phase 3; residual histograms |
-//! | [`fig7`] | Fig. 7: PF against the direct computation (15)–(16) |
-//! | [`fig8`] | Fig. 8: min–max band and mean of 25 runs on the same data |
-//! | [`n_sweep`] | beyond the paper: residual std against `N` |
+//! | [`cycle()`] | Figs. 3–4: inputs, loading phases |
+//! | [`fig5_6()`] | Figs. 5–6: simulated against estimated `Q_o`, `ρ_o` in phase 3; residual histograms |
+//! | [`fig7()`] | Fig. 7: PF against the direct computation (15)–(16) |
+//! | [`fig8()`] | Fig. 8: min–max band and mean of 25 runs on the same data |
+//! | [`n_sweep()`] | beyond the paper: residual std against `N` |
 
 mod cycle;
 mod fig5_6;

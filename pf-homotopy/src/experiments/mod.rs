@@ -5,11 +5,11 @@
 //! | function | figure / table |
 //! |---|---|
 //! | [`scenario_geometry`] | Fig. 1, the scenario |
-//! | [`ellipses`] | Fig. 2, OHF error ellipses over λ (CLI `ellipses`) |
-//! | [`rmse`] | Fig. 3, RMS position error, and the cost table (CLI `rmse`) |
-//! | [`ablation`] | final RMS error against λ steps and polar-grid resolution |
-//! | [`geometry`] | final RMS error against the unstated turn direction and σ |
-//! | [`information`] | information per bearing for each turn direction (the evidence for ours) |
+//! | [`ellipses()`] | Fig. 2, OHF error ellipses over λ (CLI `ellipses`) |
+//! | [`rmse()`] | Fig. 3, RMS position error, and the cost table (CLI `rmse`) |
+//! | [`ablation()`] | final RMS error against λ steps and polar-grid resolution |
+//! | [`geometry()`] | final RMS error against the unstated turn direction and σ |
+//! | [`information()`] | information per bearing for each turn direction (the evidence for ours) |
 
 mod ablation;
 mod ellipses;

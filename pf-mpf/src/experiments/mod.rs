@@ -2,8 +2,8 @@
 //!
 //! | function | paper |
 //! |---|---|
-//! | [`ratio`] | Figs. 1 and 2: `N(k)/N_PF` for `m = 3…9`, `n = 2` |
-//! | [`fig3`] | Fig. 3: predicted against measured time for every partition |
+//! | [`ratio()`] | Figs. 1 and 2: `N(k)/N_PF` for `m = 3…9`, `n = 2` |
+//! | [`fig3()`] | Fig. 3: predicted against measured time for every partition |
 //! | [`table2`] | Table II: constant time (and RMSE over time per partition) |
 //! | [`table3`] | Table III: constant velocity RMSE |
 //! | [`calibrate`](crate::calibrate::calibrate) | Section IV-A: `flop_ns`, `c1`, `c2`, `c3` |

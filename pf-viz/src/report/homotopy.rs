@@ -721,7 +721,7 @@ fn zoom_plot(plot: &XyPlot, centre: [f64; 2], half: f64) -> XyPlot {
     }
 }
 
-/// "<setting> <OHF> / <AOHF> m" for each setting, a failed filter shown as "failed".
+/// `"<setting> <OHF> / <AOHF> m"` for each setting, a failed filter shown as "failed".
 fn worst_list(settings: impl Iterator<Item = String>, worst: &[[Option<f64>; 2]]) -> String {
     let m = |w: Option<f64>| w.map_or("failed".into(), |v| format!("{v:.0}"));
     settings
