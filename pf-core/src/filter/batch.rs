@@ -15,8 +15,9 @@
 //! 4. exponentiates relative to that chunk maximum (a branch-free `exp`) and accumulates
 //!    the chunk's cumulative weights.
 //!
-//! Steps 2–4 work on L1-resident scratch, compiled for AVX2 when the CPU has it
-//! ([`crate::simd`]). So a chunk touches main memory in bursts (its walk reads, its
+//! Steps 2–4 work on L1-resident scratch, compiled for AVX-512 where the CPU has it and
+//! for AVX2 otherwise when it has that ([`crate::simd`]; LLVM vectorises the model's
+//! arithmetic itself, the normals and `exp` call their intrinsic twins). So a chunk touches main memory in bursts (its walk reads, its
 //! outputs' stores); from `N = 2¹⁸`, where the arrays outgrow the caches, it prefetches its
 //! walk two blocks ahead and, during its `exp`, the next chunk's outputs, so that those
 //! bursts find their lines in cache. Arrays of 2 MiB or more are mapped on 2 MiB pages
@@ -496,11 +497,17 @@ impl<M: ScalarModel> BatchBootstrap<M> {
                 .zip(rngs.iter_mut().zip(stats.iter_mut()));
             for (k, (((x, cw), lw), (rng, stat))) in chunks.enumerate() {
                 let d = g * per_group + k;
-                *stat = dispatch(
-                    simd,
-                    #[inline(always)]
-                    || chunk_step(&ctx, d, x, cw, lw, rng, scratch),
-                );
+                *stat = match ctx.avx512 {
+                    Some(cpu) => cpu.run(
+                        #[inline(always)]
+                        || chunk_step(&ctx, d, x, cw, lw, rng, scratch),
+                    ),
+                    None => dispatch(
+                        simd,
+                        #[inline(always)]
+                        || chunk_step(&ctx, d, x, cw, lw, rng, scratch),
+                    ),
+                };
             }
         };
         let gs = per_group * c;

@@ -97,6 +97,25 @@ impl Avx512 {
         }
     }
 
+    /// `f` compiled with the AVX-512 features, for a generic kernel whose loops LLVM
+    /// vectorises itself (the batch filter's chunk step).
+    #[inline]
+    pub(crate) fn run<R>(self, f: impl FnOnce() -> R) -> R {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: the token exists only where run-time detection found the features.
+            #[allow(unsafe_code)]
+            unsafe {
+                x86::with_avx512(f)
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = f;
+            self.unreachable()
+        }
+    }
+
     /// Off x86-64 no token exists, so nothing that takes one can run.
     #[cfg(not(target_arch = "x86_64"))]
     pub(crate) fn unreachable(self) -> ! {
@@ -329,6 +348,12 @@ pub(crate) mod x86 {
             rejected |= u64::from(!inside) << (8 * g);
         }
         rejected
+    }
+
+    /// [`Avx512::run`](super::Avx512::run)'s body.
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    pub(super) fn with_avx512<R>(f: impl FnOnce() -> R) -> R {
+        f()
     }
 
     /// [`Avx512::fill_normal`](super::Avx512::fill_normal)'s body.
