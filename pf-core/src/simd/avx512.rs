@@ -124,7 +124,9 @@ impl Avx512 {
 }
 
 /// The building blocks of the kernels, for eight lanes in one register each. Every function
-/// is compiled with the features of [`FEATURES`](x86::FEATURES) and inlined into its callers.
+/// is compiled with `avx2,fma,avx512f,avx512dq,avx512bw,avx512vl`, the features
+/// [`Avx512::get`] detects (each `target_feature` attribute repeats them, since an attribute
+/// takes a literal), and inlined into its callers.
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod x86 {
     use super::super::LANES;
@@ -135,12 +137,6 @@ pub(crate) mod x86 {
     };
     use super::super::tables::{LAYERS, NORMAL};
     use std::arch::x86_64::*;
-
-    /// The features every kernel is compiled with (the `target_feature` attributes repeat
-    /// it, since an attribute takes a literal): what [`Avx512::get`](super::Avx512::get)
-    /// detects.
-    #[allow(dead_code)]
-    pub(crate) const FEATURES: &str = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl";
 
     /// Eight doubles from a slice of exactly eight.
     #[inline]
@@ -301,8 +297,9 @@ pub(crate) mod x86 {
         }
     }
 
-    /// One lane step and its standard normal candidates: the twin of the portable block
-    /// (`lanes::candidates` of `normal_candidate`), the same bits. Each candidate's layer
+    /// One lane step and its standard normal candidates: the twin of `LaneRng::step` and
+    /// the candidate loop of `LaneRng::fill_ziggurat` with `normal_candidate`, the same
+    /// bits. Each candidate's layer
     /// edges `x[i]` and `x[i+1]` are adjacent, so they come in one 16-byte load, and two
     /// permutes sort eight such pairs into the two registers; Zen 4's gathers were slower
     /// than the AVX2 copy's scalar loads (performance log, 2026-11-27).

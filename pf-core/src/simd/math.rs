@@ -146,7 +146,7 @@ pub(crate) const EXP2_64THS: [u64; 64] = [
 ///
 /// The reduction of [`exp_nonpositive`] with a 16-entry table, `x = (16k + j)·ln 2/16 + r`,
 /// `|r| ≤ ln 2/32`, and `e^r − 1` from its Taylor polynomial of degree 7 (truncation below
-/// 10⁻¹⁸ relative) in Horner's form; every step is one `mul_add`, so the result is the same
+/// 10⁻¹⁸ relative) in Estrin's form; every step is one `mul_add`, so the result is the same
 /// bits on every path (see the module docs of [`simd`](super)). Sixteen entries (every
 /// fourth of the 64-entry table) fit one pair of AVX-512 registers, where one permute looks
 /// them up; the 64 entries took four permutes and three blends, and with the fused steps
@@ -187,7 +187,7 @@ pub(crate) fn exp_fma_lanes<const L: usize>(x: [f64; L]) -> [f64; L] {
     })
 }
 
-/// `1/7!, 1/6!, …, 1/2!, 1`: Horner's coefficients of `(e^r − 1)/r` in [`exp_fma`].
+/// `1/7!, 1/6!, …, 1/2!, 1`: the coefficients, highest first, of `(e^r − 1)/r` in [`exp_fma`].
 pub(crate) const EXP_TAYLOR: [f64; 7] = [
     1.0 / 5040.0,
     1.0 / 720.0,
