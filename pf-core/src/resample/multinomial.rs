@@ -1,7 +1,9 @@
 //! Multinomial resampling in O(N): Poisson offspring counts, conditioned on their total.
 
 use super::Resample;
-use super::poisson::{DrawBuffers, Rates, distinct_sorted, poisson_counts, round_mean, write_runs};
+use super::poisson::{
+    DrawBuffers, NoBases, Rates, distinct_sorted, poisson_counts, round_mean, write_runs,
+};
 use crate::simd::{LaneRng, Simd};
 use rand::Rng;
 use std::cell::RefCell;
@@ -85,7 +87,7 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
             counts.add(extra);
         }
         distinct_sorted(t, t - m, rng, seen, removed);
-        write_runs::<8>(simd, counts, removed, &|_| 0, first, out);
+        write_runs::<8>(simd, counts, removed, &NoBases, first, out);
     });
 }
 

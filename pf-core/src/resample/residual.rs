@@ -2,7 +2,9 @@
 //! particle from Poisson counts.
 
 use super::Resample;
-use super::poisson::{DrawBuffers, Rates, distinct_sorted, poisson_counts, round_mean, write_runs};
+use super::poisson::{
+    DrawBuffers, Floors, Rates, distinct_sorted, poisson_counts, round_mean, write_runs,
+};
 use crate::simd::math::floor_index;
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::Rng;
@@ -220,7 +222,7 @@ pub(crate) fn residual_draws<R: Rng + ?Sized>(
             }
         }
         distinct_sorted(t, t - r, rng, seen, removed);
-        write_runs::<4>(simd, counts, removed, &floor, first, out);
+        write_runs::<4>(simd, counts, removed, &Floors(floor), first, out);
     });
 }
 
