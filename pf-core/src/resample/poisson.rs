@@ -302,7 +302,9 @@ fn continue_terms(
     mut s: [f64; 8],
     mut more: u8,
 ) {
-    for (i, &c) in INV_FACTORIAL.iter().enumerate().skip(from) {
+    // A slice's own iterator: in a cold function (optimised for size) `skip`'s `next`
+    // stayed a call.
+    for (&c, i) in INV_FACTORIAL[from..].iter().zip(from..) {
         if more == 0 {
             break;
         }
