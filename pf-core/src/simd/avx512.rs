@@ -305,19 +305,13 @@ pub(crate) mod x86 {
     /// than the AVX2 copy's scalar loads (performance log, 2026-11-27).
     #[inline]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
-    fn normal_block(
-        s: &mut State,
-        x: &[f64; LAYERS + 1],
-        draws: &mut [u64; LANES],
-        c: &mut [f64],
-    ) -> u64 {
+    fn normal_block(s: &mut State, x: &[f64; LAYERS + 1], c: &mut [f64]) -> u64 {
         let even = _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14);
         let odd = _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15);
         let mut rejected = 0u64;
         for g in 0..LANES / 8 {
             let b = step8(s, g);
             let bits = lanes_epi64(b);
-            draws[8 * g..8 * g + 8].copy_from_slice(&bits);
             let edges = |l: usize| -> __m128d {
                 let i = bits[l] as usize & (LAYERS - 1);
                 let p: [f64; 2] = x[i..i + 2].try_into().expect("two edges");
@@ -340,7 +334,8 @@ pub(crate) mod x86 {
             let u = _mm512_sub_pd(u, _mm512_set1_pd(3.0));
             let v = _mm512_mul_pd(u, xi);
             let inside = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(_mm512_abs_pd(v), xi1);
-            let v = _mm512_mask_blend_pd(inside, _mm512_set1_pd(f64::NAN), v);
+            // A rejected candidate's place holds its draw, for the continuation.
+            let v = _mm512_mask_blend_pd(inside, _mm512_castsi512_pd(b), v);
             c[8 * g..8 * g + 8].copy_from_slice(&lanes_pd(v));
             rejected |= u64::from(!inside) << (8 * g);
         }
@@ -357,7 +352,7 @@ pub(crate) mod x86 {
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     pub(super) fn fill_normal(rng: &mut LaneRng, out: &mut [f64]) {
         let x = &NORMAL.x;
-        rng.fill_normal_blocks(out, |s, draws, c| normal_block(s, x, draws, c));
+        rng.fill_normal_blocks(out, |s, c| normal_block(s, x, c));
     }
 
     #[cfg(test)]
