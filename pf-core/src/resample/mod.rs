@@ -23,6 +23,7 @@
 
 mod chunked;
 mod counts;
+mod floors_avx512;
 mod multinomial;
 mod offspring;
 mod poisson;

@@ -5,6 +5,7 @@ use super::Resample;
 use super::poisson::{
     DrawBuffers, Floors, Rates, distinct_sorted, poisson_counts, round_mean, write_runs,
 };
+use crate::simd::avx512::Avx512;
 use crate::simd::math::floor_index;
 use crate::simd::{LaneRng, Simd, dispatch};
 use rand::Rng;
@@ -63,39 +64,72 @@ pub(crate) struct ResidualSums {
     pub(crate) peak: f64,
 }
 
+/// Running sums of [`floors_and_mass`], four lanes of each: weight `j` of a block of four
+/// goes to lane `j mod 4` (the rest after the last whole block to lane 0).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct FloorLanes {
+    /// Sums of the floors `⌊M·W_j⌋`.
+    pub(crate) floors: [f64; 4],
+    /// Sums of the residuals `r_j`.
+    pub(crate) mass: [f64; 4],
+    /// Largest residuals.
+    pub(crate) peak: [f64; 4],
+    /// Counts of the weights outside [0, 1] (or NaN).
+    pub(crate) outside: [f64; 4],
+}
+
+impl FloorLanes {
+    /// Weight `wj` into lane `l`.
+    #[inline(always)]
+    fn add(&mut self, l: usize, wj: f64, mf: f64) {
+        self.outside[l] += if (0.0..=1.0).contains(&wj) { 0.0 } else { 1.0 };
+        let x = mf * wj;
+        let ff = floor_index(x).1;
+        let r = x - ff;
+        self.floors[l] += ff;
+        self.mass[l] += r;
+        self.peak[l] = if r > self.peak[l] { r } else { self.peak[l] };
+    }
+}
+
 /// The [`ResidualSums`] of `w`, and whether every weight lies in [0, 1] (no NaN), four
 /// partial sums at a time (a vectorisable loop). Everything is summed in floats, the floors
 /// too (integers below 2⁵³, so exactly), and the weights outside [0, 1] are counted rather
 /// than flagged: with an integer sum and a boolean beside the float ones, the pass took
 /// 14 % of residual resampling's time at N = 10⁴, and 10.7 % this way (performance log).
+/// LLVM still compiles the count to a mix of scalar and vector compares, 11 instructions per
+/// weight; on a CPU with AVX-512 (and `simd` [`Simd::Auto`]) a twin does the whole blocks of
+/// eight, the same additions in the same lanes and order.
 #[inline(always)]
-fn floors_and_mass(w: &[f64], mf: f64) -> (ResidualSums, bool) {
-    let (mut f4, mut s4, mut p4, mut bad4) = ([0.0f64; 4], [0.0f64; 4], [0.0f64; 4], [0.0f64; 4]);
-    let mut add = |l: usize, wj: f64| {
-        bad4[l] += if (0.0..=1.0).contains(&wj) { 0.0 } else { 1.0 };
-        let x = mf * wj;
-        let ff = floor_index(x).1;
-        let r = x - ff;
-        f4[l] += ff;
-        s4[l] += r;
-        p4[l] = if r > p4[l] { r } else { p4[l] };
+fn floors_and_mass(simd: Simd, w: &[f64], mf: f64) -> (ResidualSums, bool) {
+    let (mut lanes, done) = match Avx512::get(simd) {
+        Some(cpu) => super::floors_avx512::floor_lanes(cpu, w, mf),
+        None => (FloorLanes::default(), 0),
     };
-    let mut chunks = w.chunks_exact(4);
-    for c in &mut chunks {
-        for (l, &wj) in c.iter().enumerate() {
-            add(l, wj);
-        }
-    }
-    for &wj in chunks.remainder() {
-        add(0, wj);
-    }
-    let ok = (bad4[0] + bad4[1]) + (bad4[2] + bad4[3]) == 0.0;
+    let rest = &w[done..];
+    dispatch(
+        simd,
+        #[inline(always)]
+        || {
+            let mut chunks = rest.chunks_exact(4);
+            for c in &mut chunks {
+                for (l, &wj) in c.iter().enumerate() {
+                    lanes.add(l, wj, mf);
+                }
+            }
+            for &wj in chunks.remainder() {
+                lanes.add(0, wj, mf);
+            }
+        },
+    );
+    let sum4 = |x: [f64; 4]| (x[0] + x[1]) + (x[2] + x[3]);
+    let ok = sum4(lanes.outside) == 0.0;
     let sums = ResidualSums {
         // Only read when `ok`; each floor is then at most `mf`, and the sum exact below 2⁵³
         // (a sum past `mf`, from weights summing past 1, leaves no draws either way).
-        floors: ((f4[0] + f4[1]) + (f4[2] + f4[3])) as usize,
-        mass: (s4[0] + s4[1]) + (s4[2] + s4[3]),
-        peak: p4.iter().fold(0.0, |a: f64, &p| a.max(p)),
+        floors: sum4(lanes.floors) as usize,
+        mass: sum4(lanes.mass),
+        peak: lanes.peak.iter().fold(0.0, |a: f64, &p| a.max(p)),
     };
     (sums, ok)
 }
@@ -108,13 +142,7 @@ fn clean(x: f64) -> f64 {
 /// The [`ResidualSums`] of the weights `w`, cleaned in place first if any lies outside
 /// [0, 1]: what [`residual_draws`] then finds in them.
 pub(crate) fn residual_sums(simd: Simd, w: &mut [f64], mf: f64) -> ResidualSums {
-    let sums = |w: &[f64]| {
-        dispatch(
-            simd,
-            #[inline(always)]
-            || floors_and_mass(w, mf),
-        )
-    };
+    let sums = |w: &[f64]| floors_and_mass(simd, w, mf);
     let (found, ok) = sums(w);
     if ok {
         return found;
@@ -148,11 +176,7 @@ pub(crate) fn residual_draws<R: Rng + ?Sized>(
     }
     let (sums, ok) = match block {
         Some(sums) => (sums, true),
-        None => dispatch(
-            simd,
-            #[inline(always)]
-            || floors_and_mass(w, mf),
-        ),
+        None => floors_and_mass(simd, w, mf),
     };
     let (floors, mass) = (sums.floors, sums.mass);
     if !ok {
@@ -232,6 +256,43 @@ mod tests {
     use crate::mc::stream_rng;
     use crate::resample::offspring_counts;
     use crate::testing::{binomial_pmf, chi2_quantile_999, multinomial_pmf, pearson_pooled};
+    use rand::RngExt;
+
+    /// The floors pass gives the same sums, bit for bit, on every kernel (the AVX-512 twin
+    /// where the CPU has it): on lengths that end inside a block of four and of eight,
+    /// weights whose `M·W_j` fall on integers and just beside them, and weights outside
+    /// [0, 1] (a NaN, a negative one, one above 1), which every kernel reports.
+    #[test]
+    fn floors_pass_is_the_same_on_every_kernel() {
+        let mut rng = stream_rng(31, 0);
+        for len in [1usize, 5, 8, 13, 64, 1003] {
+            let mf = len as f64;
+            let mut w: Vec<f64> = (0..len)
+                .map(|j| match j % 5 {
+                    0 => (j % 3) as f64 / mf,
+                    1 => ((j % 4) as f64 / mf).next_up(),
+                    2 => ((j % 4) as f64 / mf).next_down().max(0.0),
+                    _ => rng.random::<f64>().powi(4) * 3.0 / mf,
+                })
+                .collect();
+            for bad in [None, Some(f64::NAN), Some(-1e-300), Some(1.5)] {
+                if let Some(x) = bad {
+                    w[len / 2] = x;
+                }
+                let want = floors_and_mass(Simd::Portable, &w, mf);
+                for simd in [Simd::Auto, Simd::Avx2] {
+                    let got = floors_and_mass(simd, &w, mf);
+                    assert_eq!(got.1, want.1, "len {len}, {bad:?}, {simd:?}");
+                    assert_eq!(got.1, bad.is_none(), "len {len}, {bad:?}, {simd:?}");
+                    if want.1 {
+                        assert_eq!(got.0.floors, want.0.floors, "len {len}, {simd:?}");
+                        assert_eq!(got.0.mass.to_bits(), want.0.mass.to_bits(), "len {len}");
+                        assert_eq!(got.0.peak.to_bits(), want.0.peak.to_bits(), "len {len}");
+                    }
+                }
+            }
+        }
+    }
 
     /// Floors first: every particle gets at least `⌊M·W_j⌋`, exactly `M` ancestors come
     /// out, in increasing order, on every kernel alike.
