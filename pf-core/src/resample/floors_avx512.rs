@@ -1,6 +1,6 @@
 //! The AVX-512 twin of residual resampling's floors pass (`residual::floors_and_mass`):
-//! eight weights to a register, their two blocks of four added to the same four lanes one
-//! after the other, so the sums are the portable pass's, bit for bit (tested in
+//! eight weights to a register, their two blocks of four going to the same four lanes, so
+//! the sums are the portable pass's, bit for bit, wherever they are used (tested in
 //! `residual`).
 
 use super::residual::FloorLanes;
@@ -31,8 +31,9 @@ mod x86 {
     use crate::simd::avx512::x86::load_pd;
     use std::arch::x86_64::*;
 
-    /// The rounding of `vrndscalepd` that gives `⌊x⌋` (exactly `floor_index`'s for the
-    /// weights in [0, 1] whose sums are used).
+    /// The rounding of `vrndscalepd` that gives `⌊x⌋`: `floor_index`'s value for the
+    /// weights in [0, 1] whose sums are used, up to the sign of a zero (`⌊−0⌋`), which no
+    /// sum shows.
     const FLOOR: i32 = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
 
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
@@ -40,10 +41,6 @@ mod x86 {
         let m = _mm512_set1_pd(mf);
         let (zero, one) = (_mm256_setzero_pd(), _mm512_set1_pd(1.0));
         let (mut floors, mut mass, mut peak, mut outside) = (zero, zero, zero, zero);
-        // `r > peak ? r : peak`, as the portable pass selects.
-        let above = |r: __m256d, p: __m256d| {
-            _mm256_mask_blend_pd(_mm256_cmp_pd_mask::<_CMP_GT_OQ>(r, p), p, r)
-        };
         let mut blocks = w.chunks_exact(8);
         for b in &mut blocks {
             let x = load_pd(b);
@@ -56,10 +53,15 @@ mod x86 {
             let r = _mm512_sub_pd(x, ff);
             let halves = |v: __m512d| (_mm512_castpd512_pd256(v), _mm512_extractf64x4_pd::<1>(v));
             let ((o0, o1), (f0, f1), (r0, r1)) = (halves(out), halves(ff), halves(r));
-            outside = _mm256_add_pd(_mm256_add_pd(outside, o0), o1);
-            floors = _mm256_add_pd(_mm256_add_pd(floors, f0), f1);
+            // Only the residuals' sum keeps the portable order, block after block, on its
+            // carried chain. The counts and the floors are integers below 2⁵³, whose sums
+            // are exact in any order, and the largest residual is the same whichever way
+            // it is found (no NaN and no −0 where it is used: see `floors_and_mass`), so
+            // each of those adds its two blocks first, one step on its chain per eight.
+            outside = _mm256_add_pd(outside, _mm256_add_pd(o0, o1));
+            floors = _mm256_add_pd(floors, _mm256_add_pd(f0, f1));
             mass = _mm256_add_pd(_mm256_add_pd(mass, r0), r1);
-            peak = above(r1, above(r0, peak));
+            peak = _mm256_max_pd(peak, _mm256_max_pd(r0, r1));
         }
         let done = w.len() - blocks.remainder().len();
         let lanes = FloorLanes {

@@ -260,7 +260,7 @@ mod tests {
 
     /// The floors pass gives the same sums, bit for bit, on every kernel (the AVX-512 twin
     /// where the CPU has it): on lengths that end inside a block of four and of eight,
-    /// weights whose `M·W_j` fall on integers and just beside them, and weights outside
+    /// weights whose `M·W_j` fall on integers and just beside them, −0, and weights outside
     /// [0, 1] (a NaN, a negative one, one above 1), which every kernel reports.
     #[test]
     fn floors_pass_is_the_same_on_every_kernel() {
@@ -275,6 +275,8 @@ mod tests {
                     _ => rng.random::<f64>().powi(4) * 3.0 / mf,
                 })
                 .collect();
+            // −0 lies inside; `⌊−0⌋` is −0 for the twin's rounding and +0 for `floor_index`.
+            w[0] = -0.0;
             for bad in [None, Some(f64::NAN), Some(-1e-300), Some(1.5)] {
                 if let Some(x) = bad {
                     w[len / 2] = x;
