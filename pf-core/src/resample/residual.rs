@@ -99,7 +99,8 @@ impl FloorLanes {
 /// 14 % of residual resampling's time at N = 10⁴, and 10.7 % this way (performance log).
 /// LLVM still compiles the count to a mix of scalar and vector compares, 11 instructions per
 /// weight; on a CPU with AVX-512 (and `simd` [`Simd::Auto`]) a twin does the whole blocks of
-/// eight, the same additions in the same lanes and order.
+/// eight into the same lanes, with the same bits wherever they are used (the residual mass
+/// in the same order; the integer sums and the largest residual are exact in any order).
 #[inline(always)]
 fn floors_and_mass(simd: Simd, w: &[f64], mf: f64) -> (ResidualSums, bool) {
     let (mut lanes, done) = match Avx512::get(simd) {
