@@ -18,9 +18,10 @@
 //! Steps 2–4 work on L1-resident scratch, compiled for AVX-512 where the CPU has it and
 //! for AVX2 otherwise when it has that ([`crate::simd`]; LLVM vectorises the model's
 //! arithmetic itself, the normals and `exp` call their intrinsic twins). So a chunk
-//! touches main memory in bursts (its walk reads, its outputs' stores); from `N = 2¹⁸`, where the arrays outgrow the caches, it prefetches its
-//! walk two blocks ahead and, during its `exp`, the next chunk's outputs, so that those
-//! bursts find their lines in cache. Arrays of 2 MiB or more are mapped on 2 MiB pages
+//! touches main memory in bursts (its walk reads, its outputs' stores); from `N = 2¹⁸`,
+//! where the arrays outgrow the caches, it prefetches its walk two blocks ahead and,
+//! during its `exp`, the next chunk's outputs, so that those bursts find their lines in
+//! cache. Arrays of 2 MiB or more are mapped on 2 MiB pages
 //! where Linux gives them (`buffer::ParticleBuf`): the 32 MiB of a step at N = 10⁶ then
 //! take 16 TLB entries instead of 8192 (about 4 % faster there). Afterwards, a pass over
 //! the chunk summaries (not the particles) reconciles the chunk maxima: chunk `d`'s

@@ -299,10 +299,11 @@ pub(crate) mod x86 {
 
     /// One lane step and its standard normal candidates: the twin of `LaneRng::step` and
     /// the candidate loop of `LaneRng::fill_ziggurat` with `normal_candidate`, the same
-    /// bits. Each candidate's layer
-    /// edges `x[i]` and `x[i+1]` are adjacent, so they come in one 16-byte load, and two
-    /// permutes sort eight such pairs into the two registers; Zen 4's gathers were slower
-    /// than the AVX2 copy's scalar loads (performance log, 2026-11-27).
+    /// bits, except that a rejected candidate's slot holds its draw (see
+    /// `LaneRng::fill_normal_blocks`). Each candidate's layer edges `x[i]` and `x[i+1]` are
+    /// adjacent, so they come in one 16-byte load, and two permutes sort eight such pairs
+    /// into the two registers; Zen 4's gathers were slower than the AVX2 copy's scalar loads
+    /// (performance log, 2026-11-27).
     #[inline]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     fn normal_block(s: &mut State, x: &[f64; LAYERS + 1], c: &mut [f64]) -> u64 {
