@@ -44,7 +44,7 @@ use crate::resample::{
     BLOCK, BlockPlan, Blocked, ChunkSplit, ChunkedWeights, Resampler, SCAN, chunks_per_block,
     prefix4_each, stratified_index_in,
 };
-use crate::simd::avx512::Avx512;
+use crate::simd::avx512::{Avx512, BoundaryMap};
 use crate::simd::math::{ceil_index_in, exp_nonpositive, exp_nonpositive_lanes};
 use crate::simd::{LaneRng, Simd, dispatch, prefetch};
 use rand::RngExt;
@@ -663,11 +663,12 @@ fn chunk_step<M: ScalarModel>(
         // The ancestors' states land in `l` (free until the weights are computed).
         Source::Systematic(u) => {
             let k = |x: f64, a, b| ceil_index_in(x - u, a, b);
-            counted_propagate(ctx, k, lo, z, xs, &mut s.l, &mut s.hint);
+            let twin = ctx.avx512.map(|cpu| (cpu, u));
+            counted_propagate(ctx, (k, twin), lo, z, xs, &mut s.l, &mut s.hint);
         }
         Source::Stratified(key) => {
             let k = |x, a, b| stratified_index_in(x, key, a, b);
-            counted_propagate(ctx, k, lo, z, xs, &mut s.l, &mut s.hint);
+            counted_propagate(ctx, (k, None), lo, z, xs, &mut s.l, &mut s.hint);
         }
         Source::Given => {
             gather_propagate(model, t, ctx.x_old, &ctx.ancestors[lo..lo + len], z, xs);
@@ -800,7 +801,7 @@ fn exp_block(b: &mut [f64], shift: f64) {
 #[inline(always)]
 fn counted_propagate<M: ScalarModel, K: Fn(f64, f64, f64) -> usize>(
     ctx: &StepCtx<'_, M>,
-    k: K,
+    k: (K, Option<(Avx512, f64)>),
     lo: usize,
     z: &[f64],
     xs: &mut [f64],
@@ -858,7 +859,9 @@ const EXP_LANES: usize = 64;
 /// States of the ancestors of the outputs `lo .. lo + len`, into `out[..len]` (`out` has
 /// [`PAD`] more slots, overwritten freely), under the resampling whose boundaries `k` gives
 /// (see [`boundary`]): `ceil_index_in(x − U, ·)` for systematic resampling,
-/// [`stratified_index_in`] for stratified.
+/// [`stratified_index_in`] for stratified. `twin`, given only with systematic
+/// resampling's `k`, is the token and `U` for the blocks' boundaries by
+/// [`Avx512::ceil_boundaries`] (the same indices).
 ///
 /// Output `i` descends from `A_i = #{j < N − 1 : k_j ≤ i}`, the first particle whose
 /// boundary `k_j` exceeds `i`; so particle `j` fills outputs `k_{j−1} … k_j − 1`. The first
@@ -874,7 +877,7 @@ const EXP_LANES: usize = 64;
 #[inline(always)]
 fn gather_counted<M, K: Fn(f64, f64, f64) -> usize>(
     ctx: &StepCtx<'_, M>,
-    k: K,
+    (k, twin): (K, Option<(Avx512, f64)>),
     lo: usize,
     len: usize,
     out: &mut [f64],
@@ -926,8 +929,22 @@ fn gather_counted<M, K: Fn(f64, f64, f64) -> usize>(
                 prefetch(ctx.cw_old[a..b].as_ptr(), b - a);
             }
             // Boundaries relative to lo, capped at the chunk's end.
-            for (kj, &cw) in kb[..m].iter_mut().zip(&ctx.cw_old[j..j + m]) {
-                *kj = k((off + scale * cw) * ctx.n_over_total, lo_f, hi_f);
+            let cw = &ctx.cw_old[j..j + m];
+            match twin {
+                Some((cpu, u)) => {
+                    let g = BoundaryMap {
+                        offset: off,
+                        scale,
+                        n_over_total: ctx.n_over_total,
+                        u,
+                    };
+                    cpu.ceil_boundaries(cw, g, (lo_f, hi_f), &mut kb[..m]);
+                }
+                None => {
+                    for (kj, &cw) in kb[..m].iter_mut().zip(cw) {
+                        *kj = k((off + scale * cw) * ctx.n_over_total, lo_f, hi_f);
+                    }
+                }
             }
             if j + m == n {
                 // The last particle's boundary is N (the clamp).
@@ -1109,7 +1126,9 @@ mod tests {
                 // Ancestors by the chunks, with boundaries `k`, the walk's hint carried from
                 // chunk to chunk (as one worker runs them) or reset before each (a bisection
                 // over all N, as a worker's first chunk).
-                let chunked = |k: &dyn Fn(f64, f64, f64) -> usize, carry: bool| {
+                let chunked = |k: &dyn Fn(f64, f64, f64) -> usize,
+                               twin: Option<(Avx512, f64)>,
+                               carry: bool| {
                     let mut all = vec![0.0; n];
                     let mut out = vec![f64::NAN; chunk + PAD];
                     let mut hint = WalkHint::NONE;
@@ -1118,7 +1137,7 @@ mod tests {
                             hint = WalkHint::NONE;
                         }
                         let len = dst.len();
-                        gather_counted(&ctx, k, d * chunk, len, &mut out, &mut hint);
+                        gather_counted(&ctx, (k, twin), d * chunk, len, &mut out, &mut hint);
                         dst.copy_from_slice(&out[..len]);
                     }
                     all.iter().map(|&a| a as usize).collect::<Vec<_>>()
@@ -1139,11 +1158,17 @@ mod tests {
                 for u in [0.0, 0.25, 0.731, 0.999_999] {
                     let k = |x: f64, a, b| ceil_index_in(x - u, a, b);
                     let below = |i: usize, x: f64| (i as f64) < x - u;
-                    for carry in [false, true] {
+                    // On the AVX-512 twin's boundaries too, where the CPU has them.
+                    let twins = [None, Avx512::get(Simd::Auto).map(|cpu| (cpu, u))];
+                    for (carry, twin) in [false, true]
+                        .into_iter()
+                        .flat_map(|c| twins.map(|t| (c, t)))
+                    {
                         assert_eq!(
-                            chunked(&k, carry),
+                            chunked(&k, twin, carry),
                             merge(&below),
-                            "N = {n}, chunk {chunk}, U = {u}, plateaus {plateaus}, hint carried: {carry}"
+                            "N = {n}, chunk {chunk}, U = {u}, plateaus {plateaus}, hint carried: {carry}, twin {}",
+                            twin.is_some()
                         );
                     }
                 }
@@ -1157,7 +1182,7 @@ mod tests {
                     };
                     for carry in [false, true] {
                         assert_eq!(
-                            chunked(&k, carry),
+                            chunked(&k, None, carry),
                             merge(&below),
                             "N = {n}, chunk {chunk}, key {key}, plateaus {plateaus}, hint carried: {carry}"
                         );

@@ -97,6 +97,34 @@ impl Avx512 {
         }
     }
 
+    /// Systematic resampling's offspring boundaries for a block of the batch filter's
+    /// particles: `out[i] = ceil_index_in(g(cw[i]), lo, hi)` with `g` from `map` and
+    /// `(lo, hi) = range` (the same indices; see
+    /// [`ceil_index_in`](super::math::ceil_index_in)). The ceiling is one conversion with
+    /// upward rounding and the clamp two integer compares, where the portable form spends
+    /// eight floating-point additions and compares; Zen 4 splits each 512-bit one in two.
+    pub(crate) fn ceil_boundaries(
+        self,
+        cw: &[f64],
+        map: BoundaryMap,
+        range: (f64, f64),
+        out: &mut [usize],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: the token exists only where run-time detection found the features.
+            #[allow(unsafe_code)]
+            unsafe {
+                x86::ceil_boundaries(cw, map, range, out)
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = (cw, map, range, out);
+            self.unreachable()
+        }
+    }
+
     /// `f` compiled with the AVX-512 features, for a generic kernel whose loops LLVM
     /// vectorises itself (the batch filter's chunk step).
     #[inline]
@@ -123,6 +151,28 @@ impl Avx512 {
     }
 }
 
+/// The map from a particle's cumulative weight within its chunk to its systematic point
+/// count, `g(cw) = (offset + scale·cw)·n_over_total − u`, evaluated in that order.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct BoundaryMap {
+    /// The chunk's global offset.
+    pub offset: f64,
+    /// The chunk's scale.
+    pub scale: f64,
+    /// `N/T`, the particle count over the total weight.
+    pub n_over_total: f64,
+    /// The systematic uniform.
+    pub u: f64,
+}
+
+impl BoundaryMap {
+    /// `g(cw)`.
+    #[inline(always)]
+    pub(crate) fn at(&self, cw: f64) -> f64 {
+        (self.offset + self.scale * cw) * self.n_over_total - self.u
+    }
+}
+
 /// The building blocks of the kernels, for eight lanes in one register each. Every function
 /// is compiled with `avx2,fma,avx512f,avx512dq,avx512bw,avx512vl`, the features
 /// [`Avx512::get`] detects (each `target_feature` attribute repeats them, since an attribute
@@ -133,7 +183,8 @@ pub(crate) mod x86 {
     use super::super::LaneRng;
     use super::super::lanes::State;
     use super::super::math::{
-        EXP_TAYLOR, EXP2_16THS, EXP2_64THS, LN2_HI, LN2_LO, ROUND_MAGIC, exp_nonpositive,
+        EXP_TAYLOR, EXP2_16THS, EXP2_64THS, LN2_HI, LN2_LO, ROUND_MAGIC, ceil_index_in,
+        exp_nonpositive,
     };
     use super::super::tables::{LAYERS, NORMAL};
     use std::arch::x86_64::*;
@@ -343,6 +394,37 @@ pub(crate) mod x86 {
         rejected
     }
 
+    /// [`Avx512::ceil_boundaries`](super::Avx512::ceil_boundaries)'s body.
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    pub(super) fn ceil_boundaries(
+        cw: &[f64],
+        map: super::BoundaryMap,
+        (lo, hi): (f64, f64),
+        out: &mut [usize],
+    ) {
+        let (off, scale) = (_mm512_set1_pd(map.offset), _mm512_set1_pd(map.scale));
+        let (s, u) = (_mm512_set1_pd(map.n_over_total), _mm512_set1_pd(map.u));
+        // `lo ≤ hi < 2⁵¹` are integers.
+        let (lo_i, hi_i) = (_mm512_set1_epi64(lo as i64), _mm512_set1_epi64(hi as i64));
+        let mut blocks = out.chunks_exact_mut(8);
+        for (o, c) in (&mut blocks).zip(cw.chunks_exact(8)) {
+            let g = _mm512_add_pd(off, _mm512_mul_pd(scale, load_pd(c)));
+            let x = _mm512_sub_pd(_mm512_mul_pd(g, s), u);
+            // ⌈x⌉, exact for |x| < 2⁶³ (and x < 2⁵¹ here), then clamped to [lo, hi].
+            let c = _mm512_cvt_roundpd_epi64::<{ _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC }>(x);
+            let c = _mm512_min_epi64(_mm512_max_epi64(c, lo_i), hi_i);
+            let k: [u64; 8] = bytemuck::cast(_mm512_sub_epi64(c, lo_i));
+            for (o, k) in o.iter_mut().zip(k) {
+                *o = k as usize;
+            }
+        }
+        let rest = blocks.into_remainder();
+        let n = rest.len();
+        for (o, &c) in rest.iter_mut().zip(&cw[cw.len() - n..]) {
+            *o = ceil_index_in(map.at(c), lo, hi);
+        }
+    }
+
     /// [`Avx512::run`](super::Avx512::run)'s body.
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     pub(super) fn with_avx512<R>(f: impl FnOnce() -> R) -> R {
@@ -358,7 +440,7 @@ pub(crate) mod x86 {
 
     #[cfg(test)]
     mod tests {
-        use super::super::Avx512;
+        use super::super::{Avx512, BoundaryMap};
         use super::*;
         use crate::mc::stream_rng;
         use crate::simd::math::{exp_fma, unit_from_bits};
@@ -409,6 +491,46 @@ pub(crate) mod x86 {
                 for (x, y) in l.iter().zip(&got) {
                     let want = crate::simd::math::exp_nonpositive(x - shift);
                     assert_eq!(y.to_bits(), want.to_bits(), "x = {x}");
+                }
+            }
+        }
+
+        /// The boundaries twin gives `ceil_index_in`'s indices: at, just above and just below
+        /// integers, below `lo` and above `hi`, through a map that is the identity and
+        /// through one that is not, on lengths that end inside a register.
+        #[test]
+        fn ceil_boundaries_match_the_portable_index() {
+            let Some(cpu) = Avx512::get(Simd::Auto) else {
+                return;
+            };
+            let cw: Vec<f64> = (-20..140)
+                .flat_map(|i| {
+                    let x = f64::from(i);
+                    [x, x.next_up(), x.next_down(), x + 0.5, -0.0]
+                })
+                .collect();
+            let maps = [
+                BoundaryMap {
+                    offset: 0.0,
+                    scale: 1.0,
+                    n_over_total: 1.0,
+                    u: 0.0,
+                },
+                BoundaryMap {
+                    offset: 0.3,
+                    scale: 0.7,
+                    n_over_total: 1.3,
+                    u: 0.731,
+                },
+            ];
+            for map in maps {
+                for len in [cw.len(), cw.len() - 3, 5] {
+                    let (lo, hi) = (3.0, 100.0);
+                    let mut got = vec![usize::MAX; len];
+                    cpu.ceil_boundaries(&cw[..len], map, (lo, hi), &mut got);
+                    for (&c, &k) in cw.iter().zip(&got) {
+                        assert_eq!(k, ceil_index_in(map.at(c), lo, hi), "cw = {c}, {map:?}");
+                    }
                 }
             }
         }
