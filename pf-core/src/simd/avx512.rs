@@ -217,12 +217,37 @@ pub(crate) mod x86 {
     #[inline]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     pub(crate) fn step8(s: &mut State, g: usize) -> __m512i {
-        let r = 8 * g..8 * g + 8;
-        let load = |w: &[u64; LANES]| -> __m512i {
-            let a: [u64; 8] = w[r.clone()].try_into().expect("eight lanes");
+        let mut w = load_lanes(s, g);
+        let out = step_regs(&mut w);
+        store_lanes(s, g, w);
+        out
+    }
+
+    /// The state words of lanes `8g … 8g + 7`.
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    fn load_lanes(s: &State, g: usize) -> [__m512i; 4] {
+        std::array::from_fn(|k| {
+            let a: [u64; 8] = s[k][8 * g..8 * g + 8].try_into().expect("eight lanes");
             bytemuck::cast(a)
-        };
-        let (mut s0, mut s1, mut s2, mut s3) = (load(&s[0]), load(&s[1]), load(&s[2]), load(&s[3]));
+        })
+    }
+
+    /// Store the state words of lanes `8g … 8g + 7`.
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    fn store_lanes(s: &mut State, g: usize, w: [__m512i; 4]) {
+        for (s, v) in s.iter_mut().zip(w) {
+            let a: [u64; 8] = bytemuck::cast(v);
+            s[8 * g..8 * g + 8].copy_from_slice(&a);
+        }
+    }
+
+    /// One xoshiro256++ step of eight lanes held in registers: their outputs.
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    fn step_regs(w: &mut [__m512i; 4]) -> __m512i {
+        let [mut s0, mut s1, mut s2, mut s3] = *w;
         let out = _mm512_add_epi64(_mm512_rol_epi64::<23>(_mm512_add_epi64(s0, s3)), s0);
         let t = _mm512_slli_epi64::<17>(s1);
         s2 = _mm512_xor_si512(s2, s0);
@@ -231,10 +256,7 @@ pub(crate) mod x86 {
         s0 = _mm512_xor_si512(s0, s3);
         s2 = _mm512_xor_si512(s2, t);
         s3 = _mm512_rol_epi64::<45>(s3);
-        for (w, v) in s.iter_mut().zip([s0, s1, s2, s3]) {
-            let a: [u64; 8] = bytemuck::cast(v);
-            w[r.clone()].copy_from_slice(&a);
-        }
+        *w = [s0, s1, s2, s3];
         out
     }
 
@@ -348,50 +370,57 @@ pub(crate) mod x86 {
         }
     }
 
-    /// One lane step and its standard normal candidates: the twin of `LaneRng::step` and
-    /// the candidate loop of `LaneRng::fill_ziggurat` with `normal_candidate`, the same
-    /// bits, except that a rejected candidate's slot holds its draw (see
-    /// `LaneRng::fill_normal_blocks`). Each candidate's layer edges `x[i]` and `x[i+1]` are
-    /// adjacent, so they come in one 16-byte load, and two permutes sort eight such pairs
-    /// into the two registers; Zen 4's gathers were slower than the AVX2 copy's scalar loads
-    /// (performance log, 2026-11-27).
+    /// Lane steps and their standard normal candidates, one step per block of [`LANES`]
+    /// slots of `c` (whose length is `LANES · rejected.len()`), with each block's mask of
+    /// rejected candidates or-ed into `rejected`: the twin of `LaneRng::step` and the
+    /// candidate loop of `LaneRng::fill_ziggurat` with `normal_candidate`, the same bits,
+    /// except that a rejected candidate's slot holds its draw (see
+    /// `LaneRng::fill_normal_blocks`).
+    ///
+    /// The blocks are filled eight lanes at a time, through all the blocks, so that those
+    /// lanes' state stays in registers instead of a load and a store per word and step.
+    /// Each candidate's layer edges `x[i]` and `x[i+1]` are adjacent, so they come in one
+    /// 16-byte load, and two permutes sort eight such pairs into the two registers; Zen 4's
+    /// gathers were slower than the AVX2 copy's scalar loads (performance log, 2026-11-27).
     #[inline]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
-    fn normal_block(s: &mut State, x: &[f64; LAYERS + 1], c: &mut [f64]) -> u64 {
+    fn normal_blocks(s: &mut State, x: &[f64; LAYERS + 1], c: &mut [f64], rejected: &mut [u64]) {
         let even = _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14);
         let odd = _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15);
-        let mut rejected = 0u64;
         for g in 0..LANES / 8 {
-            let b = step8(s, g);
-            let bits = lanes_epi64(b);
-            let edges = |l: usize| -> __m128d {
-                let i = bits[l] as usize & (LAYERS - 1);
-                let p: [f64; 2] = x[i..i + 2].try_into().expect("two edges");
-                bytemuck::cast(p)
-            };
-            let four = |l: usize| {
-                let v = _mm512_castpd128_pd512(edges(l));
-                let v = _mm512_insertf64x2::<1>(v, edges(l + 1));
-                let v = _mm512_insertf64x2::<2>(v, edges(l + 2));
-                _mm512_insertf64x2::<3>(v, edges(l + 3))
-            };
-            let (lo, hi) = (four(0), four(4));
-            let (xi, xi1) = (
-                _mm512_permutex2var_pd(lo, even, hi),
-                _mm512_permutex2var_pd(lo, odd, hi),
-            );
-            // `u ∈ [−1, 1)` from the top 52 bits, as `normal_parts`.
-            let two = _mm512_set1_epi64(0x4000_0000_0000_0000);
-            let u = _mm512_castsi512_pd(_mm512_or_si512(_mm512_srli_epi64::<12>(b), two));
-            let u = _mm512_sub_pd(u, _mm512_set1_pd(3.0));
-            let v = _mm512_mul_pd(u, xi);
-            let inside = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(_mm512_abs_pd(v), xi1);
-            // A rejected candidate's place holds its draw, for the continuation.
-            let v = _mm512_mask_blend_pd(inside, _mm512_castsi512_pd(b), v);
-            c[8 * g..8 * g + 8].copy_from_slice(&lanes_pd(v));
-            rejected |= u64::from(!inside) << (8 * g);
+            let mut w = load_lanes(s, g);
+            for (block, rej) in c.chunks_exact_mut(LANES).zip(rejected.iter_mut()) {
+                let b = step_regs(&mut w);
+                let bits = lanes_epi64(b);
+                let edges = |l: usize| -> __m128d {
+                    let i = bits[l] as usize & (LAYERS - 1);
+                    let p: [f64; 2] = x[i..i + 2].try_into().expect("two edges");
+                    bytemuck::cast(p)
+                };
+                let four = |l: usize| {
+                    let v = _mm512_castpd128_pd512(edges(l));
+                    let v = _mm512_insertf64x2::<1>(v, edges(l + 1));
+                    let v = _mm512_insertf64x2::<2>(v, edges(l + 2));
+                    _mm512_insertf64x2::<3>(v, edges(l + 3))
+                };
+                let (lo, hi) = (four(0), four(4));
+                let (xi, xi1) = (
+                    _mm512_permutex2var_pd(lo, even, hi),
+                    _mm512_permutex2var_pd(lo, odd, hi),
+                );
+                // `u ∈ [−1, 1)` from the top 52 bits, as `normal_parts`.
+                let two = _mm512_set1_epi64(0x4000_0000_0000_0000);
+                let u = _mm512_castsi512_pd(_mm512_or_si512(_mm512_srli_epi64::<12>(b), two));
+                let u = _mm512_sub_pd(u, _mm512_set1_pd(3.0));
+                let v = _mm512_mul_pd(u, xi);
+                let inside = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(_mm512_abs_pd(v), xi1);
+                // A rejected candidate's place holds its draw, for the continuation.
+                let v = _mm512_mask_blend_pd(inside, _mm512_castsi512_pd(b), v);
+                block[8 * g..8 * g + 8].copy_from_slice(&lanes_pd(v));
+                *rej |= u64::from(!inside) << (8 * g);
+            }
+            store_lanes(s, g, w);
         }
-        rejected
     }
 
     /// [`Avx512::ceil_boundaries`](super::Avx512::ceil_boundaries)'s body.
@@ -435,7 +464,7 @@ pub(crate) mod x86 {
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     pub(super) fn fill_normal(rng: &mut LaneRng, out: &mut [f64]) {
         let x = &NORMAL.x;
-        rng.fill_normal_blocks(out, |s, c| normal_block(s, x, c));
+        rng.fill_normal_blocks(out, |s, c, r| normal_blocks(s, x, c, r));
     }
 
     #[cfg(test)]
