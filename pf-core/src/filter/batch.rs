@@ -17,7 +17,8 @@
 //!
 //! Steps 2–4 work on L1-resident scratch, compiled for AVX-512 where the CPU has it and
 //! for AVX2 otherwise when it has that ([`crate::simd`]; LLVM vectorises the model's
-//! arithmetic itself, the normals and `exp` call their intrinsic twins). So a chunk
+//! arithmetic itself; the normals, `exp` and the systematic boundaries call their
+//! intrinsic twins). So a chunk
 //! touches main memory in bursts (its walk reads, its outputs' stores); from `N = 2¹⁸`,
 //! where the arrays outgrow the caches, it prefetches its walk two blocks ahead and,
 //! during its `exp`, the next chunk's outputs, so that those bursts find their lines in
