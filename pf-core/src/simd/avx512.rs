@@ -442,10 +442,8 @@ pub(crate) mod x86 {
             // ⌈x⌉, exact for |x| < 2⁶³ (and x < 2⁵¹ here), then clamped to [lo, hi].
             let c = _mm512_cvt_roundpd_epi64::<{ _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC }>(x);
             let c = _mm512_min_epi64(_mm512_max_epi64(c, lo_i), hi_i);
-            let k: [u64; 8] = bytemuck::cast(_mm512_sub_epi64(c, lo_i));
-            for (o, k) in o.iter_mut().zip(k) {
-                *o = k as usize;
-            }
+            let k: [usize; 8] = bytemuck::cast(_mm512_sub_epi64(c, lo_i));
+            o.copy_from_slice(&k);
         }
         let rest = blocks.into_remainder();
         let n = rest.len();
