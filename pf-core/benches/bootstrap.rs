@@ -15,6 +15,7 @@ use pf_core::mc::Par;
 use pf_core::mc::stream_rng;
 use pf_core::models::NoisyAr1;
 use pf_core::resample::Resampler;
+use pf_core::simd::Simd;
 use std::hint::black_box;
 
 const STEPS: usize = 500;
@@ -88,6 +89,29 @@ fn batch(c: &mut Criterion) {
     group.finish();
 }
 
+/// The fast path at N = 10⁴ on one thread, capped at the AVX2 copy and at the portable
+/// copy of its kernels: what a CPU without AVX-512 (or without AVX2 and FMA) pays. All
+/// copies give the same bits.
+fn batch_kernels(c: &mut Criterion) {
+    const N: usize = 10_000;
+    let (model, ys) = ar1_case(STEPS);
+    let mut group = c.benchmark_group("batch_ar1_kernels");
+    group.sample_size(10);
+    group.throughput(Throughput::Elements((N * STEPS) as u64));
+    for (name, simd) in [("avx2", Simd::Avx2), ("portable", Simd::Portable)] {
+        let cfg = BatchConfig {
+            par: Par::Seq,
+            simd,
+            ..BatchConfig::new(N, 2)
+        };
+        let mut f = BatchBootstrap::new(model, cfg).expect("valid config");
+        group.bench_function(BenchmarkId::new(name, format!("N={N}")), |b| {
+            b.iter(|| black_box(f.run(&ys).expect("filter runs").log_lik))
+        });
+    }
+    group.finish();
+}
+
 /// N = 10⁷ (80 MB per state array, far beyond the caches), over 20 steps to keep a sample
 /// short: is the cost per particle-step flat in N, and what do two threads buy?
 fn batch_large(c: &mut Criterion) {
@@ -153,6 +177,7 @@ criterion_group!(
     benches,
     bootstrap,
     batch,
+    batch_kernels,
     batch_large,
     batch_schemes,
     linear_gaussian
