@@ -46,7 +46,7 @@ use crate::resample::{
     prefix4_each, stratified_index_in,
 };
 use crate::simd::avx512::{Avx512, BoundaryMap};
-use crate::simd::math::{ceil_index_in, exp_nonpositive, exp_nonpositive_lanes};
+use crate::simd::math::{ceil_index_in, exp_fma_nonpositive, exp_fma_nonpositive_lanes};
 use crate::simd::{LaneRng, Simd, dispatch, prefetch};
 use rand::RngExt;
 use rayon::prelude::*;
@@ -762,8 +762,8 @@ fn chunk_step<M: ScalarModel>(
     };
     match (ctx.avx512, next_len) {
         // On the AVX-512 twin, whose table lookups are permutes in registers.
-        (Some(cpu), 0) => cpu.exp_nonpositive_shifted(l, shift, |_| ()),
-        (Some(cpu), _) => cpu.exp_nonpositive_shifted(l, shift, ahead),
+        (Some(cpu), 0) => cpu.exp_fma_nonpositive_shifted(l, shift, |_| ()),
+        (Some(cpu), _) => cpu.exp_fma_nonpositive_shifted(l, shift, ahead),
         (None, _) => {
             let mut blocks = l.chunks_exact_mut(EXP_LANES);
             if next_len == 0 {
@@ -778,7 +778,7 @@ fn chunk_step<M: ScalarModel>(
                 }
             }
             for v in blocks.into_remainder() {
-                *v = exp_nonpositive(*v - shift);
+                *v = exp_fma_nonpositive(*v - shift);
             }
         }
     }
@@ -799,8 +799,11 @@ fn chunk_step<M: ScalarModel>(
 /// `b[k] ← exp(b[k] − shift)` over one block of [`EXP_LANES`] weights.
 #[inline(always)]
 fn exp_block(b: &mut [f64], shift: f64) {
-    let v: [f64; EXP_LANES] = std::array::from_fn(|k| b[k] - shift);
-    b.copy_from_slice(&exp_nonpositive_lanes(v));
+    let b: &mut [f64; EXP_LANES] = b.try_into().expect("a block of EXP_LANES");
+    for l in b.iter_mut() {
+        *l -= shift;
+    }
+    exp_fma_nonpositive_lanes(b);
 }
 
 /// `x_i = f(l_i, z_i)` from the ancestors' states `l` (gathered by [`gather_counted`]),
@@ -866,7 +869,7 @@ fn boundary<M>(ctx: &StepCtx<'_, M>, k: impl Fn(f64, f64, f64) -> usize, j: usiz
 /// [`gather_counted`].
 const PAD: usize = 4;
 
-/// Weights exponentiated together by [`exp_nonpositive_lanes`]. With 16, LLVM vectorised
+/// Weights exponentiated together by [`exp_fma_nonpositive_lanes`]. With 16, LLVM vectorised
 /// across blocks instead (strided loads, a transpose) and the time varied by 30 % from run
 /// to run; with 64 it vectorises each block in place (criterion: 6.0 ns per particle-step
 /// at N = 10⁴, steadily, against 6.0–9 with 16 and 6.9 with 32; 2026-11-24).

@@ -55,10 +55,10 @@ impl Avx512 {
 
     /// `l[k] ← exp(l[k] − shift)` for weights with `l[k] ≤ shift`: the batch filter's
     /// weights relative to its chunk maximum, by the twin of
-    /// [`exp_nonpositive`](super::math::exp_nonpositive) (the same bits).
+    /// [`exp_fma_nonpositive`](super::math::exp_fma_nonpositive) (the same bits).
     /// `before(o)` runs before the weights from `o` on, for `o` a multiple of 64 (the batch
     /// filter's prefetches for its next chunk).
-    pub(crate) fn exp_nonpositive_shifted(
+    pub(crate) fn exp_fma_nonpositive_shifted(
         self,
         l: &mut [f64],
         shift: f64,
@@ -69,7 +69,7 @@ impl Avx512 {
             // SAFETY: the token exists only where run-time detection found the features.
             #[allow(unsafe_code)]
             unsafe {
-                x86::exp_nonpositive_shifted(l, shift, before)
+                x86::exp_fma_nonpositive_shifted(l, shift, before)
             }
         }
         #[cfg(not(target_arch = "x86_64"))]
@@ -183,8 +183,7 @@ pub(crate) mod x86 {
     use super::super::LaneRng;
     use super::super::lanes::State;
     use super::super::math::{
-        EXP_TAYLOR, EXP2_16THS, EXP2_64THS, LN2_HI, LN2_LO, ROUND_MAGIC, ceil_index_in,
-        exp_nonpositive,
+        EXP_TAYLOR, EXP2_16THS, LN2_HI, LN2_LO, ROUND_MAGIC, ceil_index_in, exp_fma_nonpositive,
     };
     use super::super::tables::{LAYERS, NORMAL};
     use std::arch::x86_64::*;
@@ -306,66 +305,29 @@ pub(crate) mod x86 {
         _mm512_fmadd_pd(s, p, s)
     }
 
-    /// [`exp_nonpositive`] of `l[k] − shift` into `l[k]`, eight at a time: the same
-    /// operations in the same order (no fused steps), the 64-entry table looked up by four
-    /// permutes of register pairs and three blends.
+    /// [`exp_fma_nonpositive`] of `l[k] − shift` into `l[k]`, eight at a time: the same
+    /// operations in the same order, the 64-entry table looked up by four permutes of
+    /// register pairs and three blends.
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
-    pub(super) fn exp_nonpositive_shifted(
+    pub(super) fn exp_fma_nonpositive_shifted(
         l: &mut [f64],
         shift: f64,
         mut before: impl FnMut(usize),
     ) {
-        let table: [__m512d; 8] = std::array::from_fn(|i| {
-            let e: [u64; 8] = EXP2_64THS[8 * i..8 * i + 8]
-                .try_into()
-                .expect("eight entries");
-            bytemuck::cast(e)
-        });
-        let magic = _mm512_set1_pd(ROUND_MAGIC);
+        let table = exp_table();
         let sh = _mm512_set1_pd(shift);
         for (o, big) in l.chunks_mut(64).enumerate() {
             before(64 * o);
             let mut blocks = big.chunks_exact_mut(8);
             for b in &mut blocks {
                 let x = _mm512_sub_pd(load_pd(b), sh);
-                let t = _mm512_add_pd(
-                    _mm512_mul_pd(x, _mm512_set1_pd(64.0 / std::f64::consts::LN_2)),
-                    magic,
-                );
-                let nf = _mm512_sub_pd(t, magic);
-                let r = _mm512_sub_pd(x, _mm512_mul_pd(nf, _mm512_set1_pd(LN2_HI / 64.0)));
-                let r = _mm512_sub_pd(r, _mm512_mul_pd(nf, _mm512_set1_pd(LN2_LO / 64.0)));
-                let r2 = _mm512_mul_pd(r, r);
-                let a = _mm512_add_pd(
-                    _mm512_set1_pd(0.5),
-                    _mm512_mul_pd(r, _mm512_set1_pd(1.0 / 6.0)),
-                );
-                let c = _mm512_add_pd(
-                    _mm512_set1_pd(1.0 / 24.0),
-                    _mm512_mul_pd(r, _mm512_set1_pd(1.0 / 120.0)),
-                );
-                let p = _mm512_add_pd(r, _mm512_mul_pd(r2, _mm512_add_pd(a, _mm512_mul_pd(r2, c))));
-                let bits = _mm512_castpd_si512(t);
-                let k = _mm512_srai_epi64::<6>(_mm512_sub_epi64(bits, _mm512_castpd_si512(magic)));
-                // Entry `bits & 63`: the permutes read the low four bits, bits 4 and 5 choose
-                // among their four results.
-                let q: [__m512d; 4] = std::array::from_fn(|h| {
-                    _mm512_permutex2var_pd(table[2 * h], bits, table[2 * h + 1])
-                });
-                let b4 = _mm512_test_epi64_mask(bits, _mm512_set1_epi64(16));
-                let b5 = _mm512_test_epi64_mask(bits, _mm512_set1_epi64(32));
-                let lo = _mm512_mask_blend_pd(b4, q[0], q[1]);
-                let hi = _mm512_mask_blend_pd(b4, q[2], q[3]);
-                let entry = _mm512_mask_blend_pd(b5, lo, hi);
-                let s = _mm512_add_epi64(_mm512_castpd_si512(entry), _mm512_slli_epi64::<52>(k));
-                let s = _mm512_castsi512_pd(s);
-                let y = _mm512_add_pd(s, _mm512_mul_pd(s, p));
+                let y = exp_fma8(x, &table);
                 let inside = _mm512_cmp_pd_mask::<_CMP_GE_OQ>(x, _mm512_set1_pd(-708.0));
                 let y: [f64; 8] = bytemuck::cast(_mm512_maskz_mov_pd(inside, y));
                 b.copy_from_slice(&y);
             }
             for v in blocks.into_remainder() {
-                *v = exp_nonpositive(*v - shift);
+                *v = exp_fma_nonpositive(*v - shift);
             }
         }
     }
@@ -496,10 +458,10 @@ pub(crate) mod x86 {
             out
         }
 
-        /// The filter's `exp` twin gives `exp_nonpositive`'s bits, over its whole range and
+        /// The filter's `exp` twin gives `exp_fma_nonpositive`'s bits, over its whole range and
         /// beyond (0 below −708, also for −∞), on lengths that end inside a register.
         #[test]
-        fn exp_nonpositive_twin_matches() {
+        fn exp_fma_nonpositive_twin_matches() {
             let Some(cpu) = Avx512::get(Simd::Auto) else {
                 return;
             };
@@ -514,9 +476,9 @@ pub(crate) mod x86 {
                     })
                     .collect();
                 let mut got = l.clone();
-                cpu.exp_nonpositive_shifted(&mut got, shift, |_| ());
+                cpu.exp_fma_nonpositive_shifted(&mut got, shift, |_| ());
                 for (x, y) in l.iter().zip(&got) {
-                    let want = crate::simd::math::exp_nonpositive(x - shift);
+                    let want = crate::simd::math::exp_fma_nonpositive(x - shift);
                     assert_eq!(y.to_bits(), want.to_bits(), "x = {x}");
                 }
             }
