@@ -700,23 +700,13 @@ fn chunk_step<M: ScalarModel>(
             }
         }
     }
-    // Maximum (four running maxima, compare-and-select: the same result on every path) and
-    // a flag for NaN or +∞.
-    let mut m4 = [f64::NEG_INFINITY; 4];
-    let mut bad = false;
-    let mut blocks = l.chunks_exact(4);
-    for b in &mut blocks {
-        for k in 0..4 {
-            bad |= b[k].is_nan() | (b[k] == f64::INFINITY);
-            m4[k] = if b[k] > m4[k] { b[k] } else { m4[k] };
-        }
-    }
-    for &v in blocks.remainder() {
-        bad |= v.is_nan() | (v == f64::INFINITY);
-        m4[0] = if v > m4[0] { v } else { m4[0] };
-    }
-    let max_of = |a: f64, b: f64| if b > a { b } else { a };
-    let m = max_of(max_of(m4[0], m4[1]), max_of(m4[2], m4[3]));
+    // Maximum and a flag for NaN or +∞. Adding 0 makes a largest zero `+0` whichever zero
+    // a path kept (`−0` and `+0` tie), so that every path gives the same bits.
+    let (m, bad) = match ctx.avx512 {
+        Some(cpu) => cpu.max_and_flag(l),
+        None => max_and_flag(l),
+    };
+    let m = m + 0.0;
     if bad {
         let p = l
             .iter()
@@ -794,6 +784,28 @@ fn chunk_step<M: ScalarModel>(
         sum,
         sum_sq: (sq4[0] + sq4[1]) + (sq4[2] + sq4[3]),
     }
+}
+
+/// The largest of `l` (`−∞` if empty), and whether any is NaN or `+∞`: four running maxima,
+/// compare-and-select. Without NaN the maximum is the same value in any order, so
+/// [`Avx512::max_and_flag`] may keep more.
+#[inline(always)]
+fn max_and_flag(l: &[f64]) -> (f64, bool) {
+    let mut m4 = [f64::NEG_INFINITY; 4];
+    let mut bad = false;
+    let mut blocks = l.chunks_exact(4);
+    for b in &mut blocks {
+        for k in 0..4 {
+            bad |= b[k].is_nan() | (b[k] == f64::INFINITY);
+            m4[k] = if b[k] > m4[k] { b[k] } else { m4[k] };
+        }
+    }
+    for &v in blocks.remainder() {
+        bad |= v.is_nan() | (v == f64::INFINITY);
+        m4[0] = if v > m4[0] { v } else { m4[0] };
+    }
+    let max_of = |a: f64, b: f64| if b > a { b } else { a };
+    (max_of(max_of(m4[0], m4[1]), max_of(m4[2], m4[3])), bad)
 }
 
 /// `b[k] ← exp(b[k] − shift)` over one block of [`EXP_LANES`] weights.
@@ -1307,6 +1319,42 @@ mod tests {
             f.reset();
             assert!(f.particles().is_empty() && f.t().is_none());
             assert!(format!("{f:?}").starts_with("BatchBootstrap { cfg: BatchConfig {"));
+        }
+    }
+
+    /// The maximum's AVX-512 twin gives the portable loop's maximum (after the `+ 0`) and
+    /// flag: on lengths around its 32-weight blocks, with the largest value in the blocks
+    /// or in the remainder, with `−∞`, both zeros, and a NaN or `+∞` anywhere.
+    #[test]
+    fn the_maximum_twin_matches_the_portable_loop() {
+        let Some(cpu) = Avx512::get(Simd::Auto) else {
+            return;
+        };
+        let mut rng = stream_rng(5, 0);
+        for len in [0usize, 1, 7, 31, 32, 33, 64, 100, 2048] {
+            for case in 0..6 {
+                let mut l: Vec<f64> = (0..len).map(|_| -rng.random::<f64>() * 50.0).collect();
+                if len > 0 {
+                    let i = rng.random_range(0..len);
+                    match case {
+                        0 => {}
+                        1 => l[len - 1] = 1.0,
+                        2 => l.iter_mut().for_each(|v| *v = f64::NEG_INFINITY),
+                        3 => {
+                            l[i] = 0.0;
+                            l[len - 1 - i] = -0.0;
+                        }
+                        4 => l[i] = f64::NAN,
+                        _ => l[i] = f64::INFINITY,
+                    }
+                }
+                let (want, want_bad) = max_and_flag(&l);
+                let (got, got_bad) = cpu.max_and_flag(&l);
+                assert_eq!(got_bad, want_bad, "len {len}, case {case}");
+                if !want_bad {
+                    assert_eq!((got + 0.0).to_bits(), (want + 0.0).to_bits(), "len {len}");
+                }
+            }
         }
     }
 

@@ -125,6 +125,27 @@ impl Avx512 {
         }
     }
 
+    /// The largest of `l` (`−∞` if empty) and whether any is NaN or `+∞`: the batch
+    /// filter's chunk maximum, over 32 running maxima in four registers. The portable loop's
+    /// four form one chain of dependent `max`es, one per four weights, which bounded it
+    /// (0.14 ns per weight at N = 10⁴, performance log, 2026-11-27). Without NaN the result
+    /// is the same value; when the largest is zero, either zero.
+    pub(crate) fn max_and_flag(self, l: &[f64]) -> (f64, bool) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: the token exists only where run-time detection found the features.
+            #[allow(unsafe_code)]
+            unsafe {
+                x86::max_and_flag(l)
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = l;
+            self.unreachable()
+        }
+    }
+
     /// `f` compiled with the AVX-512 features, for a generic kernel whose loops LLVM
     /// vectorises itself (the batch filter's chunk step).
     #[inline]
@@ -418,6 +439,32 @@ pub(crate) mod x86 {
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     pub(super) fn with_avx512<R>(f: impl FnOnce() -> R) -> R {
         f()
+    }
+
+    /// [`Avx512::max_and_flag`](super::Avx512::max_and_flag)'s body.
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    pub(super) fn max_and_flag(l: &[f64]) -> (f64, bool) {
+        let inf = _mm512_set1_pd(f64::INFINITY);
+        let mut m = [_mm512_set1_pd(f64::NEG_INFINITY); 4];
+        let mut bad: __mmask8 = 0;
+        let mut blocks = l.chunks_exact(32);
+        for b in &mut blocks {
+            for (q, m) in m.iter_mut().enumerate() {
+                let v = load_pd(&b[8 * q..8 * q + 8]);
+                bad |= _mm512_cmp_pd_mask::<_CMP_NLT_UQ>(v, inf);
+                *m = _mm512_max_pd(v, *m);
+            }
+        }
+        let m = _mm512_max_pd(_mm512_max_pd(m[0], m[1]), _mm512_max_pd(m[2], m[3]));
+        let mut best = f64::NEG_INFINITY;
+        for v in lanes_pd(m)
+            .into_iter()
+            .chain(blocks.remainder().iter().copied())
+        {
+            best = if v > best { v } else { best };
+        }
+        let bad = bad != 0 || blocks.remainder().iter().any(|v| !(*v < f64::INFINITY));
+        (best, bad)
     }
 
     /// [`Avx512::fill_normal`](super::Avx512::fill_normal)'s body.
