@@ -463,7 +463,11 @@ pub(crate) mod x86 {
         {
             best = if v > best { v } else { best };
         }
-        let bad = bad != 0 || blocks.remainder().iter().any(|v| !(*v < f64::INFINITY));
+        let bad = bad != 0
+            || blocks
+                .remainder()
+                .iter()
+                .any(|v| v.is_nan() || *v == f64::INFINITY);
         (best, bad)
     }
 
