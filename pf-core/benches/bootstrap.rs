@@ -90,18 +90,24 @@ fn batch(c: &mut Criterion) {
 }
 
 /// The fast path at N = 10⁴ on one thread, capped at the AVX2 copy and at the portable
-/// copy of its kernels: what a CPU without AVX-512 (or without AVX2 and FMA) pays. All
-/// copies give the same bits.
+/// copy of its kernels: what a CPU without AVX-512 (or without AVX2 and FMA) pays, with
+/// systematic resampling and, on the AVX2 copy, with multinomial resampling (its Poisson
+/// counts). All copies give the same bits.
 fn batch_kernels(c: &mut Criterion) {
     const N: usize = 10_000;
     let (model, ys) = ar1_case(STEPS);
     let mut group = c.benchmark_group("batch_ar1_kernels");
     group.sample_size(10);
     group.throughput(Throughput::Elements((N * STEPS) as u64));
-    for (name, simd) in [("avx2", Simd::Avx2), ("portable", Simd::Portable)] {
+    for (name, simd, resampler) in [
+        ("avx2", Simd::Avx2, Resampler::Systematic),
+        ("portable", Simd::Portable, Resampler::Systematic),
+        ("multinomial/avx2", Simd::Avx2, Resampler::Multinomial),
+    ] {
         let cfg = BatchConfig {
             par: Par::Seq,
             simd,
+            resampler,
             ..BatchConfig::new(N, 2)
         };
         let mut f = BatchBootstrap::new(model, cfg).expect("valid config");
