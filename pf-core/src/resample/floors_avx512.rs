@@ -4,25 +4,11 @@
 //! `residual`).
 
 use super::residual::FloorLanes;
-use crate::simd::avx512::Avx512;
+use crate::simd::avx512::{Avx512, on_avx512};
 
 /// The [`FloorLanes`] of the whole blocks of eight of `w`, and how many weights that is.
 pub(crate) fn floor_lanes(cpu: Avx512, w: &[f64], mf: f64) -> (FloorLanes, usize) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let _ = cpu;
-        // SAFETY: the token exists only where run-time detection found the features the
-        // kernel is compiled with.
-        #[allow(unsafe_code)]
-        unsafe {
-            x86::floor_lanes(w, mf)
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = (w, mf);
-        cpu.unreachable()
-    }
+    on_avx512!(cpu, x86::floor_lanes, (w, mf))
 }
 
 #[cfg(target_arch = "x86_64")]

@@ -12,7 +12,7 @@
 use super::counts::Counts;
 use super::poisson::Rates;
 use crate::simd::LaneRng;
-use crate::simd::avx512::Avx512;
+use crate::simd::avx512::{Avx512, on_avx512};
 use rand::Rng;
 
 /// [`poisson_counts`](super::poisson::poisson_counts) on AVX-512, into `counts` (already
@@ -25,25 +25,17 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
     lanes: &mut LaneRng,
     rng: &mut R,
 ) -> (usize, f64) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let _ = cpu;
-        // SAFETY: the token exists only where run-time detection found the features the
-        // kernels are compiled with.
-        #[allow(unsafe_code)]
-        unsafe {
-            match rates {
-                Rates::Scaled(a) => x86::poisson_counts::<false, R>(counts, w, a, 0.0, lanes, rng),
-                Rates::Residuals { a, b } => {
-                    x86::poisson_counts::<true, R>(counts, w, a, b, lanes, rng)
-                }
-            }
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = (counts, w, rates, lanes, rng);
-        cpu.unreachable()
+    match rates {
+        Rates::Scaled(a) => on_avx512!(
+            cpu,
+            x86::poisson_counts::<false, R>,
+            (counts, w, a, 0.0, lanes, rng)
+        ),
+        Rates::Residuals { a, b } => on_avx512!(
+            cpu,
+            x86::poisson_counts::<true, R>,
+            (counts, w, a, b, lanes, rng)
+        ),
     }
 }
 

@@ -17,6 +17,31 @@
 
 use super::{LaneRng, Simd};
 
+/// `$kernel($args)`, a kernel compiled with the AVX-512 features, called behind the token
+/// `$cpu`: the body of every safe wrapper of a kernel. Off x86-64 no token exists, and the
+/// call is unreachable.
+macro_rules! on_avx512 {
+    ($cpu:expr, $kernel:path, ($($arg:expr),* $(,)?)) => {{
+        let cpu: $crate::simd::avx512::Avx512 = $cpu;
+        #[cfg(target_arch = "x86_64")]
+        {
+            let _ = cpu;
+            // SAFETY: the token exists only where run-time detection found the features the
+            // kernels are compiled with (see `Avx512::get`).
+            #[allow(unsafe_code)]
+            unsafe {
+                $kernel($($arg),*)
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = ($($arg),*);
+            cpu.unreachable()
+        }
+    }};
+}
+pub(crate) use on_avx512;
+
 /// Proof that the CPU runs the AVX-512 kernels: made only by [`Avx512::get`], after run-time
 /// detection, and taken by each safe wrapper of a kernel.
 #[derive(Debug, Clone, Copy)]
@@ -64,37 +89,13 @@ impl Avx512 {
         shift: f64,
         before: impl FnMut(usize),
     ) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            // SAFETY: the token exists only where run-time detection found the features.
-            #[allow(unsafe_code)]
-            unsafe {
-                x86::exp_fma_nonpositive_shifted(l, shift, before)
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            let _ = (l, shift, before);
-            self.unreachable()
-        }
+        on_avx512!(self, x86::exp_fma_nonpositive_shifted, (l, shift, before))
     }
 
     /// Standard normals into `out` from `rng`: the twin of
     /// [`LaneRng::fill_normal`](super::LaneRng::fill_normal) (the same draws, the same bits).
     pub(crate) fn fill_normal(self, rng: &mut LaneRng, out: &mut [f64]) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            // SAFETY: the token exists only where run-time detection found the features.
-            #[allow(unsafe_code)]
-            unsafe {
-                x86::fill_normal(rng, out)
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            let _ = (rng, out);
-            self.unreachable()
-        }
+        on_avx512!(self, x86::fill_normal, (rng, out))
     }
 
     /// Systematic resampling's offspring boundaries for a block of the batch filter's
@@ -110,19 +111,7 @@ impl Avx512 {
         range: (f64, f64),
         out: &mut [usize],
     ) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            // SAFETY: the token exists only where run-time detection found the features.
-            #[allow(unsafe_code)]
-            unsafe {
-                x86::ceil_boundaries(cw, map, range, out)
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            let _ = (cw, map, range, out);
-            self.unreachable()
-        }
+        on_avx512!(self, x86::ceil_boundaries, (cw, map, range, out))
     }
 
     /// The largest of `l` (`−∞` if empty) and whether any is NaN or `+∞`: the batch
@@ -131,38 +120,14 @@ impl Avx512 {
     /// (0.14 ns per weight at N = 10⁴, performance log, 2026-11-27). Without NaN the result
     /// is the same value; when the largest is zero, either zero.
     pub(crate) fn max_and_flag(self, l: &[f64]) -> (f64, bool) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            // SAFETY: the token exists only where run-time detection found the features.
-            #[allow(unsafe_code)]
-            unsafe {
-                x86::max_and_flag(l)
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            let _ = l;
-            self.unreachable()
-        }
+        on_avx512!(self, x86::max_and_flag, (l))
     }
 
     /// `f` compiled with the AVX-512 features, for a generic kernel whose loops LLVM
     /// vectorises itself (the batch filter's chunk step).
     #[inline]
     pub(crate) fn run<R>(self, f: impl FnOnce() -> R) -> R {
-        #[cfg(target_arch = "x86_64")]
-        {
-            // SAFETY: the token exists only where run-time detection found the features.
-            #[allow(unsafe_code)]
-            unsafe {
-                x86::with_avx512(f)
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            let _ = f;
-            self.unreachable()
-        }
+        on_avx512!(self, x86::with_avx512, (f))
     }
 
     /// Off x86-64 no token exists, so nothing that takes one can run.
@@ -326,9 +291,8 @@ pub(crate) mod x86 {
         _mm512_fmadd_pd(s, p, s)
     }
 
-    /// [`exp_fma_nonpositive`] of `l[k] − shift` into `l[k]`, eight at a time: the same
-    /// operations in the same order, the 64-entry table looked up by four permutes of
-    /// register pairs and three blends.
+    /// [`exp_fma_nonpositive`] of `l[k] − shift` into `l[k]`, eight at a time: [`exp_fma8`]
+    /// (the same operations in the same order) and the mask below −708.
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     pub(super) fn exp_fma_nonpositive_shifted(
         l: &mut [f64],

@@ -36,8 +36,9 @@ pub const LANES: usize = 64;
 ///   cheaper than a libm call on a path taken for about one candidate in a hundred.
 ///   Where the CPU has AVX-512, [`fill_normal`](Self::fill_normal) makes the candidates on
 ///   an intrinsic twin (eight lanes to a register, kept there through 32 lane steps,
-///   `vprolq` for the rotations, a candidate's two layer edges in one load): 0.88 against
-///   1.22 ns per normal for the AVX2 copy, the same bits.
+///   `vprolq` for the rotations, a candidate's two layer edges in one load, its layer
+///   index read back from memory): 0.80 against 1.22 ns per normal for the AVX2 copy, the
+///   same bits.
 ///
 /// A call that fills `m` values consumes `⌈m / 64⌉` lane steps (a partial last step is
 /// discarded), so the values depend on how a stream is cut into calls, never on the thread
