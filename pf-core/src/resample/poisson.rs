@@ -902,18 +902,28 @@ mod tests {
                 for (j, &c) in counts.iter().enumerate() {
                     packed.set(j, c);
                 }
+                // Runs of four and of eight copies a store.
+                fn write<B: Bases>(
+                    simd: Simd,
+                    counts: &Counts,
+                    removed: &[usize],
+                    bases: &B,
+                    len: usize,
+                ) -> [Vec<usize>; 2] {
+                    let mut out = [vec![usize::MAX; len], vec![usize::MAX; len]];
+                    write_runs::<4>(simd, counts, removed, bases, 0, &mut out[0]);
+                    write_runs::<8>(simd, counts, removed, bases, 0, &mut out[1]);
+                    out
+                }
                 for simd in [Simd::Auto, Simd::Avx2, Simd::Portable] {
-                    let mut out = vec![usize::MAX; want.len()];
-                    let mut out8 = vec![usize::MAX; want.len()];
-                    if with_bases {
-                        write_runs::<4>(simd, &packed, &removed, &Floors(base), 0, &mut out);
-                        write_runs::<8>(simd, &packed, &removed, &Floors(base), 0, &mut out8);
+                    let outs = if with_bases {
+                        write(simd, &packed, &removed, &Floors(base), want.len())
                     } else {
-                        write_runs::<4>(simd, &packed, &removed, &NoBases, 0, &mut out);
-                        write_runs::<8>(simd, &packed, &removed, &NoBases, 0, &mut out8);
+                        write(simd, &packed, &removed, &NoBases, want.len())
+                    };
+                    for (out, w) in outs.iter().zip([4, 8]) {
+                        assert_eq!(*out, want, "N = {n}, bases {with_bases}, W = {w}, {simd:?}");
                     }
-                    assert_eq!(out8, want, "N = {n}, bases {with_bases}, {simd:?}");
-                    assert_eq!(out, want, "N = {n}, bases {with_bases}, {simd:?}");
                 }
             }
         }
