@@ -135,12 +135,13 @@ impl Rates {
     /// mispredicted exits cost more than two terms more for everyone (AVX-512 counts before
     /// the fused sums, ns per particle: six terms 3.42, seven 2.78, eight 2.59, nine 2.57,
     /// ten 2.77, twelve 3.30; with them, seven 1.99, eight 1.82, nine 1.81; scratch harness,
-    /// 2026-11-27). Residual rates are at most about 1, where five leave `P(N ≥ 5) < 0.4 %`
-    /// per particle.
+    /// 2026-11-27). Residual rates are at most about 1, where four leave `P(N ≥ 4) < 1.9 %`
+    /// per particle: residual resampling at N = 10⁶ took 3.53–3.63 ns with four, 3.70–3.71
+    /// with five and 3.81 with three (criterion, 2026-11-27 evening).
     pub(crate) const fn terms(self) -> usize {
         match self {
             Rates::Scaled(_) => 8,
-            Rates::Residuals { .. } => 5,
+            Rates::Residuals { .. } => 4,
         }
     }
 }
@@ -186,7 +187,7 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
         _ => dispatch(
             simd,
             #[inline(always)]
-            || poisson_counts_portable::<5, R>(counts, w, rates, lanes, rng),
+            || poisson_counts_portable::<4, R>(counts, w, rates, lanes, rng),
         ),
     }
 }
