@@ -425,17 +425,14 @@ pub(crate) mod x86 {
         }
         let m = _mm512_max_pd(_mm512_max_pd(m[0], m[1]), _mm512_max_pd(m[2], m[3]));
         let mut best = f64::NEG_INFINITY;
-        for v in lanes_pd(m)
-            .into_iter()
-            .chain(blocks.remainder().iter().copied())
-        {
+        for v in lanes_pd(m) {
             best = if v > best { v } else { best };
         }
-        let bad = bad != 0
-            || blocks
-                .remainder()
-                .iter()
-                .any(|v| v.is_nan() || *v == f64::INFINITY);
+        let mut bad = bad != 0;
+        for &v in blocks.remainder() {
+            bad |= v.is_nan() | (v == f64::INFINITY);
+            best = if v > best { v } else { best };
+        }
         (best, bad)
     }
 
