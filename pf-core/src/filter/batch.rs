@@ -45,8 +45,8 @@ use crate::resample::{
     BLOCK, BlockPlan, Blocked, ChunkSplit, ChunkedWeights, Resampler, SCAN, chunks_per_block,
     prefix4_each, stratified_index_in,
 };
-use crate::simd::avx512::{Avx512, BoundaryMap};
-use crate::simd::math::{ceil_index_in, exp_fma_nonpositive, exp_fma_nonpositive_lanes};
+use crate::simd::avx512::Avx512;
+use crate::simd::math::{ChunkMap, ceil_index_in, exp_fma_nonpositive, exp_fma_nonpositive_lanes};
 use crate::simd::{LaneRng, Simd, dispatch, prefetch};
 use rand::RngExt;
 use rayon::prelude::*;
@@ -261,6 +261,18 @@ struct StepCtx<'a, M> {
     per_group: usize,
     /// The AVX-512 twins, where the configuration allows them and the CPU has AVX-512.
     avx512: Option<Avx512>,
+}
+
+impl<M> StepCtx<'_, M> {
+    /// Chunk `d`'s map from its particles' cumulative weights to their scaled global ones.
+    #[inline(always)]
+    fn chunk_map(&self, d: usize) -> ChunkMap {
+        ChunkMap {
+            offset: self.offset[d],
+            scale: self.scale[d],
+            n_over_total: self.n_over_total,
+        }
+    }
 }
 
 /// From this many particles (the four state and weight arrays then span 8 MiB or more) each
@@ -872,9 +884,7 @@ fn boundary<M>(ctx: &StepCtx<'_, M>, k: impl Fn(f64, f64, f64) -> usize, j: usiz
     if j + 1 >= ctx.n {
         return ctx.n;
     }
-    let d = j / ctx.c;
-    let g = ctx.offset[d] + ctx.scale[d] * ctx.cw_old[j];
-    k(g * ctx.n_over_total, 0.0, ctx.n as f64)
+    k(ctx.chunk_map(j / ctx.c).x(ctx.cw_old[j]), 0.0, ctx.n as f64)
 }
 
 /// Padding after a chunk's scratch, for the unconditional four-wide stores of
@@ -948,7 +958,7 @@ fn gather_counted<M, K: Fn(f64, f64, f64) -> usize>(
     'walk: while j < n {
         let d = j / ctx.c;
         let end = ((d + 1) * ctx.c).min(n);
-        let (off, scale) = (ctx.offset[d], ctx.scale[d]);
+        let map = ctx.chunk_map(d);
         while j < end {
             let m = (end - j).min(SCAN);
             if ctx.prefetch {
@@ -962,18 +972,10 @@ fn gather_counted<M, K: Fn(f64, f64, f64) -> usize>(
             // Boundaries relative to lo, capped at the chunk's end.
             let cw = &ctx.cw_old[j..j + m];
             match twin {
-                Some((cpu, u)) => {
-                    let g = BoundaryMap {
-                        offset: off,
-                        scale,
-                        n_over_total: ctx.n_over_total,
-                        u,
-                    };
-                    cpu.ceil_boundaries(cw, g, (lo_f, hi_f), &mut kb[..m]);
-                }
+                Some((cpu, u)) => cpu.ceil_boundaries(cw, (map, u), (lo_f, hi_f), &mut kb[..m]),
                 None => {
                     for (kj, &cw) in kb[..m].iter_mut().zip(cw) {
-                        *kj = k((off + scale * cw) * ctx.n_over_total, lo_f, hi_f);
+                        *kj = k(map.x(cw), lo_f, hi_f);
                     }
                 }
             }
@@ -1148,12 +1150,7 @@ mod tests {
                     avx512: None,
                 };
                 // G_j N/T, from the global cumulative weights.
-                let pos: Vec<f64> = (0..n)
-                    .map(|j| {
-                        let d = j / chunk;
-                        (f.offset[d] + f.scale[d] * cw[j]) * ctx.n_over_total
-                    })
-                    .collect();
+                let pos: Vec<f64> = (0..n).map(|j| ctx.chunk_map(j / chunk).x(cw[j])).collect();
                 // Ancestors by the chunks, with boundaries `k`, the walk's hint carried from
                 // chunk to chunk (as one worker runs them) or reset before each (a bisection
                 // over all N, as a worker's first chunk).

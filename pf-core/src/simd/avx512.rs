@@ -15,6 +15,7 @@
 //! the features they need; calling such a function is `unsafe` only because of the CPU
 //! requirement, which [`Avx512`] discharges once: it exists only after run-time detection.
 
+use super::math::ChunkMap;
 use super::{LaneRng, Simd};
 
 /// `$kernel($args)`, a kernel compiled with the AVX-512 features, called behind the token
@@ -99,7 +100,7 @@ impl Avx512 {
     }
 
     /// Systematic resampling's offspring boundaries for a block of the batch filter's
-    /// particles: `out[i] = ceil_index_in(g(cw[i]), lo, hi)` with `g` from `map` and
+    /// particles: `out[i] = ceil_index_in(map.x(cw[i]) − u, lo, hi)` with
     /// `(lo, hi) = range` (the same indices; see
     /// [`ceil_index_in`](super::math::ceil_index_in)). The ceiling is one conversion with
     /// upward rounding and the clamp two integer compares, where the portable form spends
@@ -107,11 +108,11 @@ impl Avx512 {
     pub(crate) fn ceil_boundaries(
         self,
         cw: &[f64],
-        map: BoundaryMap,
+        (map, u): (ChunkMap, f64),
         range: (f64, f64),
         out: &mut [usize],
     ) {
-        on_avx512!(self, x86::ceil_boundaries, (cw, map, range, out))
+        on_avx512!(self, x86::ceil_boundaries, (cw, map, u, range, out))
     }
 
     /// The largest of `l` (`−∞` if empty) and whether any is NaN or `+∞`: the batch
@@ -137,28 +138,6 @@ impl Avx512 {
     }
 }
 
-/// The map from a particle's cumulative weight within its chunk to its systematic point
-/// count, `g(cw) = (offset + scale·cw)·n_over_total − u`, evaluated in that order.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct BoundaryMap {
-    /// The chunk's global offset.
-    pub offset: f64,
-    /// The chunk's scale.
-    pub scale: f64,
-    /// `N/T`, the particle count over the total weight.
-    pub n_over_total: f64,
-    /// The systematic uniform.
-    pub u: f64,
-}
-
-impl BoundaryMap {
-    /// `g(cw)`.
-    #[inline(always)]
-    pub(crate) fn at(&self, cw: f64) -> f64 {
-        (self.offset + self.scale * cw) * self.n_over_total - self.u
-    }
-}
-
 /// The building blocks of the kernels, for eight lanes in one register each. Every function
 /// is compiled with `avx2,fma,avx512f,avx512dq,avx512bw,avx512vl`, the features
 /// [`Avx512::get`] detects (each `target_feature` attribute repeats them, since an attribute
@@ -169,7 +148,8 @@ pub(crate) mod x86 {
     use super::super::LaneRng;
     use super::super::lanes::State;
     use super::super::math::{
-        EXP_TAYLOR, EXP2_16THS, LN2_HI, LN2_LO, ROUND_MAGIC, ceil_index_in, exp_fma_nonpositive,
+        ChunkMap, EXP_TAYLOR, EXP2_16THS, LN2_HI, LN2_LO, ROUND_MAGIC, ceil_index_in,
+        exp_fma_nonpositive,
     };
     use super::super::tables::{LAYERS, NORMAL};
     use std::arch::x86_64::*;
@@ -378,18 +358,20 @@ pub(crate) mod x86 {
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     pub(super) fn ceil_boundaries(
         cw: &[f64],
-        map: super::BoundaryMap,
+        map: ChunkMap,
+        u: f64,
         (lo, hi): (f64, f64),
         out: &mut [usize],
     ) {
+        // `map.x(cw) − u`, the same operations in the same order.
         let (off, scale) = (_mm512_set1_pd(map.offset), _mm512_set1_pd(map.scale));
-        let (s, u) = (_mm512_set1_pd(map.n_over_total), _mm512_set1_pd(map.u));
+        let (s, u_v) = (_mm512_set1_pd(map.n_over_total), _mm512_set1_pd(u));
         // `lo ≤ hi < 2⁵¹` are integers.
         let (lo_i, hi_i) = (_mm512_set1_epi64(lo as i64), _mm512_set1_epi64(hi as i64));
         let mut blocks = out.chunks_exact_mut(8);
         for (o, c) in (&mut blocks).zip(cw.chunks_exact(8)) {
             let g = _mm512_add_pd(off, _mm512_mul_pd(scale, load_pd(c)));
-            let x = _mm512_sub_pd(_mm512_mul_pd(g, s), u);
+            let x = _mm512_sub_pd(_mm512_mul_pd(g, s), u_v);
             // ⌈x⌉, exact for |x| < 2⁶³ (and x < 2⁵¹ here), then clamped to [lo, hi].
             let c = _mm512_cvt_roundpd_epi64::<{ _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC }>(x);
             let c = _mm512_min_epi64(_mm512_max_epi64(c, lo_i), hi_i);
@@ -399,7 +381,7 @@ pub(crate) mod x86 {
         let rest = blocks.into_remainder();
         let n = rest.len();
         for (o, &c) in rest.iter_mut().zip(&cw[cw.len() - n..]) {
-            *o = ceil_index_in(map.at(c), lo, hi);
+            *o = ceil_index_in(map.x(c) - u, lo, hi);
         }
     }
 
@@ -445,7 +427,7 @@ pub(crate) mod x86 {
 
     #[cfg(test)]
     mod tests {
-        use super::super::{Avx512, BoundaryMap};
+        use super::super::Avx512;
         use super::*;
         use crate::mc::stream_rng;
         use crate::simd::math::{exp_fma, unit_from_bits};
@@ -515,26 +497,31 @@ pub(crate) mod x86 {
                 })
                 .collect();
             let maps = [
-                BoundaryMap {
-                    offset: 0.0,
-                    scale: 1.0,
-                    n_over_total: 1.0,
-                    u: 0.0,
-                },
-                BoundaryMap {
-                    offset: 0.3,
-                    scale: 0.7,
-                    n_over_total: 1.3,
-                    u: 0.731,
-                },
+                (
+                    ChunkMap {
+                        offset: 0.0,
+                        scale: 1.0,
+                        n_over_total: 1.0,
+                    },
+                    0.0,
+                ),
+                (
+                    ChunkMap {
+                        offset: 0.3,
+                        scale: 0.7,
+                        n_over_total: 1.3,
+                    },
+                    0.731,
+                ),
             ];
-            for map in maps {
+            for (map, u) in maps {
                 for len in [cw.len(), cw.len() - 3, 5] {
                     let (lo, hi) = (3.0, 100.0);
                     let mut got = vec![usize::MAX; len];
-                    cpu.ceil_boundaries(&cw[..len], map, (lo, hi), &mut got);
+                    cpu.ceil_boundaries(&cw[..len], (map, u), (lo, hi), &mut got);
                     for (&c, &k) in cw.iter().zip(&got) {
-                        assert_eq!(k, ceil_index_in(map.at(c), lo, hi), "cw = {c}, {map:?}");
+                        let want = ceil_index_in(map.x(c) - u, lo, hi);
+                        assert_eq!(k, want, "cw = {c}, {map:?}, u = {u}");
                     }
                 }
             }

@@ -259,6 +259,29 @@ pub(crate) fn ceil_index(x: f64) -> usize {
     ((t.to_bits().wrapping_sub(ROUND_MAGIC.to_bits()) as i64) + i64::from(r < x)) as usize
 }
 
+/// The batch filter's map from a particle's cumulative weight `cw` within its chunk to its
+/// global cumulative weight scaled by `N/T`, `x = (offset + scale·cw)·n_over_total`,
+/// evaluated in that order: systematic resampling's point count below the particle is
+/// `⌈x − U⌉`. One definition for the portable walk, its bisection and the AVX-512 twin, which
+/// must agree to the bit.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ChunkMap {
+    /// The chunk's global offset.
+    pub offset: f64,
+    /// The chunk's scale.
+    pub scale: f64,
+    /// `N/T`, the particle count over the total weight.
+    pub n_over_total: f64,
+}
+
+impl ChunkMap {
+    /// `x(cw)`.
+    #[inline(always)]
+    pub(crate) fn x(&self, cw: f64) -> f64 {
+        (self.offset + self.scale * cw) * self.n_over_total
+    }
+}
+
 /// `⌈x⌉` clamped to `[lo, hi]`, minus `lo`, as an index, for integers `0 ≤ lo ≤ hi < 2⁵¹`
 /// and `x < 2⁵¹` (the same as `ceil_index(x).clamp(lo, hi) − lo` for `x > −1`): the clamp in
 /// two float compare-and-selects rather than unsigned 64-bit ones, which AVX2 lacks. In the
