@@ -46,7 +46,9 @@ use crate::resample::{
     prefix4_each, stratified_index_in,
 };
 use crate::simd::avx512::Avx512;
-use crate::simd::math::{ChunkMap, ceil_index_in, exp_fma_nonpositive, exp_fma_nonpositive_lanes};
+use crate::simd::math::{
+    ChunkMap, ceil_index_in, exp_fma_nonpositive, exp_fma_nonpositive_lanes, max_and_flag,
+};
 use crate::simd::{LaneRng, Simd, dispatch, prefetch};
 use rand::RngExt;
 use rayon::prelude::*;
@@ -796,28 +798,6 @@ fn chunk_step<M: ScalarModel>(
         sum,
         sum_sq: (sq4[0] + sq4[1]) + (sq4[2] + sq4[3]),
     }
-}
-
-/// The largest of `l` (`−∞` if empty), and whether any is NaN or `+∞`: four running maxima,
-/// compare-and-select. Without NaN the maximum is the same value in any order, so
-/// [`Avx512::max_and_flag`] may keep more.
-#[inline(always)]
-fn max_and_flag(l: &[f64]) -> (f64, bool) {
-    let mut m4 = [f64::NEG_INFINITY; 4];
-    let mut bad = false;
-    let mut blocks = l.chunks_exact(4);
-    for b in &mut blocks {
-        for k in 0..4 {
-            bad |= b[k].is_nan() | (b[k] == f64::INFINITY);
-            m4[k] = if b[k] > m4[k] { b[k] } else { m4[k] };
-        }
-    }
-    for &v in blocks.remainder() {
-        bad |= v.is_nan() | (v == f64::INFINITY);
-        m4[0] = if v > m4[0] { v } else { m4[0] };
-    }
-    let max_of = |a: f64, b: f64| if b > a { b } else { a };
-    (max_of(max_of(m4[0], m4[1]), max_of(m4[2], m4[3])), bad)
 }
 
 /// `b[k] ← exp(b[k] − shift)` over one block of [`EXP_LANES`] weights.

@@ -410,12 +410,8 @@ pub(crate) mod x86 {
         for v in lanes_pd(m) {
             best = if v > best { v } else { best };
         }
-        let mut bad = bad != 0;
-        for &v in blocks.remainder() {
-            bad |= v.is_nan() | (v == f64::INFINITY);
-            best = if v > best { v } else { best };
-        }
-        (best, bad)
+        let (rest, rest_bad) = super::super::math::max_and_flag(blocks.remainder());
+        (if rest > best { rest } else { best }, bad != 0 || rest_bad)
     }
 
     /// [`Avx512::fill_normal`](super::Avx512::fill_normal)'s body.

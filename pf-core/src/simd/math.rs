@@ -259,6 +259,29 @@ pub(crate) fn ceil_index(x: f64) -> usize {
     ((t.to_bits().wrapping_sub(ROUND_MAGIC.to_bits()) as i64) + i64::from(r < x)) as usize
 }
 
+/// The largest of `l` (`−∞` if empty), and whether any is NaN or `+∞`: four running maxima,
+/// compare-and-select. Without NaN the maximum is the same value in any order, so
+/// [`Avx512::max_and_flag`](super::avx512::Avx512::max_and_flag) may keep more (and takes its
+/// remainder here).
+#[inline(always)]
+pub(crate) fn max_and_flag(l: &[f64]) -> (f64, bool) {
+    let mut m4 = [f64::NEG_INFINITY; 4];
+    let mut bad = false;
+    let mut blocks = l.chunks_exact(4);
+    for b in &mut blocks {
+        for k in 0..4 {
+            bad |= b[k].is_nan() | (b[k] == f64::INFINITY);
+            m4[k] = if b[k] > m4[k] { b[k] } else { m4[k] };
+        }
+    }
+    for &v in blocks.remainder() {
+        bad |= v.is_nan() | (v == f64::INFINITY);
+        m4[0] = if v > m4[0] { v } else { m4[0] };
+    }
+    let max_of = |a: f64, b: f64| if b > a { b } else { a };
+    (max_of(max_of(m4[0], m4[1]), max_of(m4[2], m4[3])), bad)
+}
+
 /// The batch filter's map from a particle's cumulative weight `cw` within its chunk to its
 /// global cumulative weight scaled by `N/T`, `x = (offset + scale·cw)·n_over_total`,
 /// evaluated in that order: systematic resampling's point count below the particle is
