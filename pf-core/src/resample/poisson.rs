@@ -163,9 +163,10 @@ impl Rates {
 /// rounding). Rates above [`RATE_INVERT`] are drawn by `rand_distr` on `rng`, particle by
 /// particle in order. Exact up to the rounding of the sums (a few ulp of each probability).
 ///
-/// On a CPU with AVX-512 (and `simd` [`Simd::Auto`]) the twin in `poisson_avx512` runs, the
-/// same operations eight particles to a register; otherwise the code below, compiled by
-/// [`dispatch`]. Both give the same counts (tested).
+/// On a CPU with AVX-512 (and `simd` [`Simd::Auto`]) the twin in `poisson_avx512` runs: the
+/// inversion in single precision, sixteen particles to a register, each count certified
+/// against this one's sums or redone with its operations. Otherwise the code below runs,
+/// compiled by [`dispatch`]. Both give the same counts (tested).
 pub(crate) fn poisson_counts<R: Rng + ?Sized>(
     simd: Simd,
     counts: &mut Counts,
@@ -241,7 +242,7 @@ pub(crate) fn rate_of(x: f64) -> f64 {
 /// The inversion counts of one block, `k[q]` for rate `lam[q]` and draw `bits[q]`, and the
 /// mask of the lanes whose rate is above [`RATE_INVERT`] (their `k` is 0, for [`escape`]).
 #[inline(always)]
-fn poisson_block<const T: usize>(
+pub(super) fn poisson_block<const T: usize>(
     lam: &[f64; LANES],
     bits: &[u64; LANES],
     k: &mut [u64; LANES],

@@ -1,13 +1,42 @@
 //! The AVX-512 twin of [`poisson_counts`](super::poisson::poisson_counts): the same
-//! inversion, eight particles to a register and four registers side by side.
+//! counts as the portable kernel, found in single precision and certified lane by lane.
 //!
-//! The portable kernel, compiled by LLVM for AVX-512, kept its 64-lane arrays in memory and
-//! looked the `exp` table up lane by lane. Here a block of 64 particles is two halves of four
-//! groups of eight; each group steps its eight lanes of the [`LaneRng`] (the same draws as
-//! the portable lane step), and the four groups go through `exp`, the terms and the compares
-//! a step at a time, so that their chains of dependent operations overlap (one group at a
-//! time waited on latency: 2.6 against 2.3 ns per particle, scratch harness, 2026-11-27).
-//! The counts equal the portable kernel's (tested in `poisson`).
+//! A block of 64 particles is two halves of four groups of eight. Each group steps its
+//! eight lanes of the [`LaneRng`] (the same draws as the portable lane step) and forms its
+//! rates in `f64`, so the rates' sums and the escapes above [`RATE_INVERT`](super::poisson::RATE_INVERT) are the
+//! portable kernel's. The inversion then runs sixteen lanes to a register in `f32`: the
+//! rate rounded, the uniform's top 24 bits, a single-precision `e^λ` ([`exp16`](x86::exp16)), and
+//! the partial sums `S_i = Σ_{k ≤ i} λ^k/k!`.
+//!
+//! **The certification.** Each lane counts its sums at or below
+//! `hi = (u₂₄ + 2⁻²⁴)·e^λ·(1 + δ)`, and its count stands only where the last of them is
+//! also at or below `lo = u₂₄·e^λ·(1 − δ)`, so that no sum lies between the two. Here `δ` is
+//! [`DELTA`](x86::DELTA) (2⁻¹⁶ ≈ 1.5·10⁻⁵).
+//!
+//! The errors against the `f64` kernel's `U = u·e^λ` and sums, relative, at most:
+//! - `(3i + 1)·2⁻²⁴` for sum `i`: the rate's rounding carried through `λ^i`, one rounding
+//!   per multiply and per fused step, and `1/i!` rounded. That is 5.4·10⁻⁶ at the last term,
+//!   [`LAST_TERM`](x86::LAST_TERM) = 30.
+//! - about 10⁻⁶ for `e^λ`: `λ·2⁻²⁴` ≤ 7.2·10⁻⁷ from the rate's rounding at `λ ≤ 12`, and
+//!   1.5·10⁻⁷ from [`exp16`](x86::exp16) (tested).
+//! - 1.2·10⁻⁷ for the products forming `hi` and `lo`.
+//!
+//! The `f64` values are within about 10⁻¹⁴ of exact. The truncated uniform is at most
+//! 2⁻²⁴ below `u`, which `hi` covers. So a certified lane has every sum at or below `lo`
+//! at or below `U` in `f64`, and every sum above `hi` above it: its count is the `f64`
+//! kernel's, bit for bit, with twice the margin needed.
+//!
+//! **Lanes that are not certified.** Near a sum (on the bench's weights a few lanes in 10⁵),
+//! a lane whose `f32` sum stops moving, and a lane still going at [`LAST_TERM`](x86::LAST_TERM) are not
+//! certified. Their pair of groups is redone by the `f64` inversion ([`counts64`](x86::counts64)), the
+//! portable kernel's operations in its order. A pair with a lane whose count reaches the
+//! compared terms continues in `f32` a term at a time, inline.
+//!
+//! Sixteen lanes to a register halve the inversion's chains. Multinomial resampling at
+//! N = 10⁶ took 3.04–3.10 ns against 3.49 with the `f64` inversion, and residual
+//! 3.23–3.34 against 3.60 (performance log, 2026-11-27, eighth session). The counts equal
+//! the portable kernel's: tested in `poisson`, in `multinomial`, and here on lanes built to
+//! sit on the sums.
 
 use super::counts::Counts;
 use super::poisson::Rates;
@@ -43,18 +72,51 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
 mod x86 {
     use super::super::counts::Counts;
     use super::super::poisson::{INV_FACTORIAL, RATE_INVERT, Rates, escape};
-    use crate::simd::avx512::x86::{
-        exp_fma8, exp_table, lanes_epi64, lanes_pd, load_pd, step8, unit8,
-    };
+    use crate::simd::avx512::x86::{exp_fma8, exp_table, load_pd, step8, unit8};
+    use crate::simd::math::EXP2_16THS;
     use crate::simd::{LANES, LaneRng};
     use rand::Rng;
     use std::arch::x86_64::*;
 
-    /// Groups of eight particles taken side by side.
-    const G: usize = 4;
-
     /// The rounding of `vrndscalepd` that gives `⌊x⌋`.
     const FLOOR: i32 = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
+
+    /// The relative margin `δ = 2⁻¹⁶` of the single-precision counts (see the module docs):
+    /// above twice their worst error against the `f64` inversion's sums and `u·e^λ`.
+    pub(super) const DELTA: f32 = 1.0 / 65_536.0;
+
+    /// The last term of the single-precision inversion: `λ³⁰` stays finite in `f32` for
+    /// `λ ≤ 12`, and the error bound `(3i + 1)·2⁻²⁴` of the sums holds the margin there.
+    pub(super) const LAST_TERM: usize = 30;
+
+    /// `1/i!` rounded to `f32`, `i = 0 … LAST_TERM`.
+    static INV_FACTORIAL_F32: [f32; LAST_TERM + 1] = {
+        let mut t = [0.0f32; LAST_TERM + 1];
+        let mut i = 0;
+        while i <= LAST_TERM {
+            t[i] = INV_FACTORIAL[i] as f32;
+            i += 1;
+        }
+        t
+    };
+
+    /// `2^{j/16}`, `j = 0 … 15`, rounded to `f32`: one register, looked up by `vpermps`.
+    static EXP2_16THS_F32: [f32; 16] = {
+        let mut t = [0.0f32; 16];
+        let mut j = 0;
+        while j < 16 {
+            t[j] = f64::from_bits(EXP2_16THS[j]) as f32;
+            j += 1;
+        }
+        t
+    };
+
+    /// `ln 2/16` in two parts for the reduction of [`exp16`].
+    const LN2_16_HI: f32 = (std::f64::consts::LN_2 / 16.0) as f32;
+    const LN2_16_LO: f32 = (std::f64::consts::LN_2 / 16.0 - LN2_16_HI as f64) as f32;
+
+    /// `2⁻²⁴`: the spacing of the single-precision uniforms.
+    const ULP_U: f32 = 1.0 / 16_777_216.0;
 
     /// The kernel for [`Rates::Scaled`]`(a)`, or with `RESIDUALS` for
     /// [`Rates::Residuals`]` { a, b }`.
@@ -73,11 +135,10 @@ mod x86 {
             Rates::Scaled(a)
         };
         let terms = rates.terms();
-        let table = exp_table();
-        let (zero, one) = (_mm512_setzero_pd(), _mm512_set1_pd(1.0));
-        let ones = _mm512_set1_epi64(1);
+        let table = exp_table16();
+        let zero = _mm512_setzero_pd();
         let mut sums = zero;
-        let mut inverted = _mm512_setzero_si512();
+        let mut inverted = _mm256_setzero_si256();
         let mut total = 0usize;
         let mut wpad = [0.0f64; LANES];
         for (blk, wb) in w.chunks(LANES).enumerate() {
@@ -93,10 +154,10 @@ mod x86 {
             };
             let mut cb = [0u8; LANES];
             let mut escaped = 0u64;
-            for h in 0..LANES / (8 * G) {
-                let g0 = h * G;
-                let bits: [__m512i; G] = std::array::from_fn(|q| step8(lanes.state(), g0 + q));
-                let lam: [__m512d; G] = std::array::from_fn(|q| {
+            for h in 0..LANES / 32 {
+                let g0 = 4 * h;
+                let bits: [__m512i; 4] = std::array::from_fn(|q| step8(lanes.state(), g0 + q));
+                let lam: [__m512d; 4] = std::array::from_fn(|q| {
                     let x = load_pd(&wb[8 * (g0 + q)..8 * (g0 + q + 1)]);
                     let x = _mm512_mul_pd(_mm512_set1_pd(a), x);
                     if RESIDUALS {
@@ -111,44 +172,22 @@ mod x86 {
                 for l in lam {
                     sums = _mm512_add_pd(sums, l);
                 }
-                let esc: [__mmask8; G] = std::array::from_fn(|q| {
+                let esc: [__mmask8; 4] = std::array::from_fn(|q| {
                     _mm512_cmp_pd_mask::<_CMP_GT_OQ>(lam[q], _mm512_set1_pd(RATE_INVERT))
                 });
-                let e: [__m512d; G] = std::array::from_fn(|q| exp_fma8(lam[q], &table));
-                let u: [__m512d; G] = std::array::from_fn(|q| _mm512_mul_pd(unit8(bits[q]), e[q]));
-                let mut pw = lam;
-                let mut s: [__m512d; G] = std::array::from_fn(|q| _mm512_add_pd(one, lam[q]));
-                let mut k: [__m512i; G] = std::array::from_fn(|q| {
-                    _mm512_maskz_mov_epi64(_mm512_cmp_pd_mask::<_CMP_GE_OQ>(u[q], one), ones)
-                });
-                let mut ge: [__mmask8; G] =
-                    std::array::from_fn(|q| _mm512_cmp_pd_mask::<_CMP_GE_OQ>(u[q], s[q]));
-                for &c in &INV_FACTORIAL[2..terms] {
-                    let c = _mm512_set1_pd(c);
-                    for q in 0..G {
-                        k[q] = _mm512_mask_add_epi64(k[q], ge[q], k[q], ones);
-                        pw[q] = _mm512_mul_pd(pw[q], lam[q]);
-                        s[q] = _mm512_fmadd_pd(pw[q], c, s[q]);
-                        ge[q] = _mm512_cmp_pd_mask::<_CMP_GE_OQ>(u[q], s[q]);
-                    }
+                let k = counts32(lam, bits, esc, terms, table);
+                // The 32 counts as bytes (each at most `MAX_TERM`), narrowed in registers and
+                // stored once (narrowing straight to memory, `vpmovdb` with a memory operand,
+                // is slow), and summed eight bytes to a lane.
+                let bytes =
+                    _mm256_set_m128i(_mm512_cvtepi32_epi8(k[1]), _mm512_cvtepi32_epi8(k[0]));
+                inverted =
+                    _mm256_add_epi64(inverted, _mm256_sad_epu8(bytes, _mm256_setzero_si256()));
+                let bytes: [u8; 32] = bytemuck::cast(bytes);
+                cb[32 * h..32 * (h + 1)].copy_from_slice(&bytes);
+                for (q, &e) in esc.iter().enumerate() {
+                    escaped |= u64::from(e) << (8 * (g0 + q));
                 }
-                for q in 0..G {
-                    k[q] = _mm512_mask_add_epi64(k[q], ge[q], k[q], ones);
-                    let more = ge[q] & !esc[q];
-                    if more != 0 {
-                        k[q] = continue_terms(terms, k[q], lam[q], u[q], pw[q], s[q], more);
-                    }
-                    k[q] = _mm512_maskz_mov_epi64(!esc[q], k[q]);
-                    inverted = _mm512_add_epi64(inverted, k[q]);
-                    escaped |= u64::from(esc[q]) << (8 * (g0 + q));
-                }
-                // The four groups' counts as 32 bytes: narrowed in registers and stored once
-                // (narrowing straight to memory, `vpmovqb` with a memory operand, is slow).
-                let b: [__m128i; G] = std::array::from_fn(|q| _mm512_cvtepi64_epi8(k[q]));
-                let lo = _mm_unpacklo_epi64(b[0], b[1]);
-                let hi = _mm_unpacklo_epi64(b[2], b[3]);
-                let bytes: [u8; 32] = bytemuck::cast(_mm256_set_m128i(hi, lo));
-                cb[8 * g0..8 * (g0 + G)].copy_from_slice(&bytes);
             }
             if len == LANES {
                 // A copy of constant length: inline stores, not a call to `memmove`.
@@ -165,14 +204,207 @@ mod x86 {
                 total = total.saturating_add(escape(counts, escaped, j0, &lam, rng));
             }
         }
-        let inverted: u64 = lanes_epi64(inverted).iter().sum();
-        let sums: f64 = lanes_pd(sums).iter().sum();
-        (total.saturating_add(inverted as usize), sums)
+        let inverted: [u64; 4] = bytemuck::cast(inverted);
+        let sums: [f64; 8] = bytemuck::cast(sums);
+        let inverted: u64 = inverted.iter().sum();
+        (total.saturating_add(inverted as usize), sums.iter().sum())
+    }
+
+    /// The table of [`exp16`].
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    fn exp_table16() -> __m512 {
+        bytemuck::cast(EXP2_16THS_F32)
+    }
+
+    /// `e^x` in single precision for `0 ≤ x ≤ 12`, within about 1.5·10⁻⁷ relative (tested):
+    /// `x = (16n + j)·ln 2/16 + r`, `|r| ≤ ln 2/32`, `2^{j/16}` from the table, and `e^r − 1`
+    /// from its Taylor polynomial of degree 3 (truncation below 10⁻⁸). Other lanes give
+    /// values of no use and no fault.
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    pub(super) fn exp16(x: __m512, table: __m512) -> __m512 {
+        let magic = _mm512_set1_ps(12_582_912.0); // 1.5·2²³: adding it rounds to an integer
+        let t = _mm512_fmadd_ps(
+            x,
+            _mm512_set1_ps((16.0 / std::f64::consts::LN_2) as f32),
+            magic,
+        );
+        let nf = _mm512_sub_ps(t, magic);
+        let r = _mm512_fnmadd_ps(nf, _mm512_set1_ps(LN2_16_HI), x);
+        let r = _mm512_fnmadd_ps(nf, _mm512_set1_ps(LN2_16_LO), r);
+        let q = _mm512_fmadd_ps(r, _mm512_set1_ps(1.0 / 6.0), _mm512_set1_ps(0.5));
+        let q = _mm512_fmadd_ps(q, r, _mm512_set1_ps(1.0));
+        let p = _mm512_mul_ps(q, r);
+        let bits = _mm512_castps_si512(t);
+        let n = _mm512_srai_epi32::<4>(_mm512_sub_epi32(bits, _mm512_castps_si512(magic)));
+        // The permute reads the low four bits of each index: `j`.
+        let entry = _mm512_permutexvar_ps(bits, table);
+        let s = _mm512_add_epi32(_mm512_castps_si512(entry), _mm512_slli_epi32::<23>(n));
+        let s = _mm512_castsi512_ps(s);
+        _mm512_fmadd_ps(s, p, s)
+    }
+
+    /// The rates of two groups of eight as sixteen `f32` lanes, the first group's first.
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    fn pack16(a: __m512d, b: __m512d) -> __m512 {
+        let lo = _mm512_castps256_ps512(_mm512_cvtpd_ps(a));
+        _mm512_insertf32x8::<1>(lo, _mm512_cvtpd_ps(b))
+    }
+
+    /// The top 24 bits of two groups' draws as `f32` uniforms `⌊b/2⁴⁰⌋·2⁻²⁴`: each at most
+    /// `2⁻²⁴` below its `f64` uniform [`unit8`], which has the next 28 bits too.
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    fn unit16(a: __m512i, b: __m512i) -> __m512 {
+        // The high half of each 64-bit lane, `a`'s eight then `b`'s.
+        let high = _mm512_set_epi32(31, 29, 27, 25, 23, 21, 19, 17, 15, 13, 11, 9, 7, 5, 3, 1);
+        let top = _mm512_srli_epi32::<8>(_mm512_permutex2var_epi32(a, high, b));
+        _mm512_mul_ps(_mm512_cvtepi32_ps(top), _mm512_set1_ps(ULP_U))
+    }
+
+    /// The counts of four groups of eight (rates `lam`, draws `bits`, escaped lanes `esc`)
+    /// as two registers of sixteen `i32`, each pair of groups in one: the inversion in
+    /// single precision, certified against the `f64` one lane by lane, and the `f64` one
+    /// ([`counts64`]) for a pair with a lane that is not. Escaped lanes count 0.
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    pub(super) fn counts32(
+        lam: [__m512d; 4],
+        bits: [__m512i; 4],
+        esc: [__mmask8; 4],
+        terms: usize,
+        table: __m512,
+    ) -> [__m512i; 2] {
+        let one = _mm512_set1_ps(1.0);
+        let l: [__m512; 2] = std::array::from_fn(|q| pack16(lam[2 * q], lam[2 * q + 1]));
+        let unit: [__m512; 2] = std::array::from_fn(|q| unit16(bits[2 * q], bits[2 * q + 1]));
+        let esc16: [__mmask16; 2] =
+            std::array::from_fn(|q| u16::from(esc[2 * q]) | u16::from(esc[2 * q + 1]) << 8);
+        let e: [__m512; 2] = std::array::from_fn(|q| exp16(l[q], table));
+        // `u·e^λ` from above (the uniform's truncation and the margin) and from below.
+        let hi: [__m512; 2] = std::array::from_fn(|q| {
+            let u = _mm512_add_ps(unit[q], _mm512_set1_ps(ULP_U));
+            _mm512_mul_ps(_mm512_mul_ps(u, e[q]), _mm512_set1_ps(1.0 + DELTA))
+        });
+        let lo: [__m512; 2] = std::array::from_fn(|q| {
+            _mm512_mul_ps(_mm512_mul_ps(unit[q], e[q]), _mm512_set1_ps(1.0 - DELTA))
+        });
+        // `k`: the sums `S_0 = 1, S_1, …` at or below `hi`; `below`: the last of them (0
+        // when none), which must be at or below `lo` too.
+        let mut pw = l;
+        let mut s: [__m512; 2] = std::array::from_fn(|q| _mm512_add_ps(one, l[q]));
+        let mut k: [__m512i; 2] = std::array::from_fn(|q| {
+            let ge = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(hi[q], one);
+            _mm512_maskz_mov_epi32(ge, _mm512_set1_epi32(1))
+        });
+        let mut below: [__m512; 2] = std::array::from_fn(|q| {
+            _mm512_maskz_mov_ps(_mm512_cmp_ps_mask::<_CMP_GE_OQ>(hi[q], one), one)
+        });
+        let mut ge: [__mmask16; 2] =
+            std::array::from_fn(|q| _mm512_cmp_ps_mask::<_CMP_GE_OQ>(hi[q], s[q]));
+        for (i, &c) in INV_FACTORIAL_F32[..terms].iter().enumerate().skip(2) {
+            let (c, i) = (_mm512_set1_ps(c), _mm512_set1_epi32(i as i32));
+            for q in 0..2 {
+                k[q] = _mm512_mask_mov_epi32(k[q], ge[q], i);
+                below[q] = _mm512_mask_mov_ps(below[q], ge[q], s[q]);
+                pw[q] = _mm512_mul_ps(pw[q], l[q]);
+                s[q] = _mm512_fmadd_ps(pw[q], c, s[q]);
+                ge[q] = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(hi[q], s[q]);
+            }
+        }
+        std::array::from_fn(|q| {
+            let mut k = _mm512_mask_mov_epi32(k[q], ge[q], _mm512_set1_epi32(terms as i32));
+            let mut below = _mm512_mask_mov_ps(below[q], ge[q], s[q]);
+            let more = ge[q] & !esc16[q];
+            let unresolved = if more != 0 {
+                continue16(terms, &mut k, &mut below, l[q], hi[q], pw[q], s[q], more)
+            } else {
+                0
+            };
+            let near = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(below, lo[q]);
+            if (near | unresolved) & !esc16[q] != 0 {
+                let pair = |x: [__m512d; 4]| [x[2 * q], x[2 * q + 1]];
+                let bits = [bits[2 * q], bits[2 * q + 1]];
+                k = counts64(pair(lam), bits, [esc[2 * q], esc[2 * q + 1]], terms);
+            }
+            _mm512_maskz_mov_epi32(!esc16[q], k)
+        })
+    }
+
+    /// The single-precision inversion continued from term `from` for the lanes in `more`
+    /// (at or below `hi` at the last sum `s`, `pw` the last power), until none is; returns
+    /// the lanes it cannot settle: those whose sum stops moving in `f32`, or still going at
+    /// [`LAST_TERM`].
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    #[allow(clippy::too_many_arguments)]
+    fn continue16(
+        from: usize,
+        k: &mut __m512i,
+        below: &mut __m512,
+        lam: __m512,
+        hi: __m512,
+        mut pw: __m512,
+        mut s: __m512,
+        mut more: __mmask16,
+    ) -> __mmask16 {
+        let mut unresolved = 0;
+        for (&c, i) in INV_FACTORIAL_F32[from..].iter().zip(from..) {
+            if more == 0 {
+                return unresolved;
+            }
+            pw = _mm512_mul_ps(pw, lam);
+            let next = _mm512_fmadd_ps(pw, _mm512_set1_ps(c), s);
+            let stuck = more & _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(next, s);
+            unresolved |= stuck;
+            more = _mm512_mask_cmp_ps_mask::<_CMP_GE_OQ>(more & !stuck, hi, next);
+            *k = _mm512_mask_mov_epi32(*k, more, _mm512_set1_epi32(i as i32 + 1));
+            *below = _mm512_mask_mov_ps(*below, more, next);
+            s = next;
+        }
+        unresolved | more
+    }
+
+    /// The `f64` inversion of two groups of eight, the portable kernel's operations in its
+    /// order (so its counts), as sixteen `i32`: for the rare pair the single-precision
+    /// counts cannot settle.
+    #[cold]
+    #[inline(never)]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    pub(super) fn counts64(
+        lam: [__m512d; 2],
+        bits: [__m512i; 2],
+        esc: [__mmask8; 2],
+        terms: usize,
+    ) -> __m512i {
+        let table = exp_table();
+        let (one, ones) = (_mm512_set1_pd(1.0), _mm512_set1_epi64(1));
+        let k: [__m256i; 2] = std::array::from_fn(|q| {
+            let lam = lam[q];
+            let u = _mm512_mul_pd(unit8(bits[q]), exp_fma8(lam, &table));
+            let mut pw = lam;
+            let mut s = _mm512_add_pd(one, lam);
+            let mut k = _mm512_maskz_mov_epi64(_mm512_cmp_pd_mask::<_CMP_GE_OQ>(u, one), ones);
+            let mut ge = _mm512_cmp_pd_mask::<_CMP_GE_OQ>(u, s);
+            for &c in &INV_FACTORIAL[2..terms] {
+                k = _mm512_mask_add_epi64(k, ge, k, ones);
+                pw = _mm512_mul_pd(pw, lam);
+                s = _mm512_fmadd_pd(pw, _mm512_set1_pd(c), s);
+                ge = _mm512_cmp_pd_mask::<_CMP_GE_OQ>(u, s);
+            }
+            k = _mm512_mask_add_epi64(k, ge, k, ones);
+            let more = ge & !esc[q];
+            if more != 0 {
+                k = continue_terms(terms, k, lam, u, pw, s, more);
+            }
+            _mm512_cvtepi64_epi32(k)
+        });
+        _mm512_inserti64x4::<1>(_mm512_castsi256_si512(k[0]), k[1])
     }
 
     /// `poisson::continue_terms` for one group of eight.
-    #[cold]
-    #[inline(never)]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     fn continue_terms(
         from: usize,
@@ -184,8 +416,6 @@ mod x86 {
         mut more: __mmask8,
     ) -> __m512i {
         let ones = _mm512_set1_epi64(1);
-        // A slice's own iterator: in a cold function (optimised for size) `skip`'s `next`
-        // stayed a call, with every register spilled around it.
         for (&c, i) in INV_FACTORIAL[from..].iter().zip(from..) {
             if more == 0 {
                 break;
@@ -199,5 +429,181 @@ mod x86 {
             k = _mm512_mask_add_epi64(k, more, k, ones);
         }
         k
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::super::super::poisson::poisson_block;
+        use super::*;
+        use crate::mc::stream_rng;
+        use crate::simd::Simd;
+        use crate::simd::avx512::Avx512;
+        use crate::simd::math::exp_fma;
+        use rand::RngExt;
+
+        /// [`exp16`] of each value (a multiple of sixteen of them).
+        #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+        fn exp16_of(xs: &[f32]) -> Vec<f32> {
+            let table = exp_table16();
+            xs.chunks_exact(16)
+                .flat_map(|x| {
+                    let x: [f32; 16] = x.try_into().expect("sixteen lanes");
+                    let y: [f32; 16] = bytemuck::cast(exp16(bytemuck::cast(x), table));
+                    y
+                })
+                .collect()
+        }
+
+        /// [`counts32`] of 32 lanes, with `terms` compared up front.
+        #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+        fn counts_of(lam: &[f64; 32], bits: &[u64; 32], terms: usize) -> [i32; 32] {
+            let l: [__m512d; 4] = std::array::from_fn(|q| load_pd(&lam[8 * q..8 * q + 8]));
+            let b: [__m512i; 4] = std::array::from_fn(|q| {
+                let x: [u64; 8] = bits[8 * q..8 * q + 8].try_into().expect("eight lanes");
+                bytemuck::cast(x)
+            });
+            let esc: [__mmask8; 4] = std::array::from_fn(|q| {
+                _mm512_cmp_pd_mask::<_CMP_GT_OQ>(l[q], _mm512_set1_pd(RATE_INVERT))
+            });
+            bytemuck::cast(counts32(l, b, esc, terms, exp_table16()))
+        }
+
+        /// The single-precision `exp` is within 1.5·10⁻⁷ of `e^x` (taken in `f64`) over
+        /// `[0, 12]`: every 97th `f32` there, and the ends. The certification's margin
+        /// assumes 10⁻⁶ with the rounding of the rate.
+        #[test]
+        fn exp16_is_accurate_on_the_rates() {
+            let Some(_) = Avx512::get(Simd::Auto) else {
+                return;
+            };
+            let mut xs: Vec<f32> = (0..12.0f32.to_bits())
+                .step_by(97)
+                .map(f32::from_bits)
+                .collect();
+            xs.extend([0.0, 12.0, 12.0f32.next_down(), f32::MIN_POSITIVE]);
+            xs.resize(xs.len().next_multiple_of(16), 1.0);
+            // SAFETY: the token exists only where the CPU has the features.
+            #[allow(unsafe_code)]
+            let got = unsafe { exp16_of(&xs) };
+            let worst = xs
+                .iter()
+                .zip(&got)
+                .map(|(&x, &y)| {
+                    let e = f64::from(x).exp();
+                    (f64::from(y) - e).abs() / e
+                })
+                .fold(0.0, f64::max);
+            assert!(worst < 1.5e-7, "relative error {worst:e}");
+        }
+
+        /// `f64` draws whose `u·e^λ` falls within a few ulp of the inversion's partial sums
+        /// `S_i` (as the kernels compute them), and others at the ends of the uniforms, for
+        /// rates from 0 (and below `f32`'s normal range) to past [`RATE_INVERT`].
+        fn hard_lanes(seed: u64, n: usize) -> (Vec<f64>, Vec<u64>) {
+            let mut rng = stream_rng(seed, 0);
+            let (mut lam, mut bits) = (Vec::new(), Vec::new());
+            for i in 0..n {
+                let l = match i % 11 {
+                    0 => 0.0,
+                    1 => 1e-40,
+                    2 => rng.random::<f64>() * 1e-6,
+                    3 => 12.0,
+                    4 => 12.0f64.next_up(),
+                    5 => 5.0 + 7.0 * rng.random::<f64>(),
+                    6 => 1.0 + 4.0 * rng.random::<f64>(),
+                    _ => rng.random::<f64>(),
+                };
+                let low: u64 = rng.random::<u64>() & 0xfff;
+                let b = match i % 5 {
+                    0 => rng.random(),
+                    1 => u64::MAX - (low << 20),
+                    2 => low,
+                    _ => {
+                        // A partial sum S_t as the kernels form it, and u = S_t/e^λ give or
+                        // take two steps of 2⁻⁵².
+                        let t = rng.random_range(0..=(l as usize + 10).min(28));
+                        let (mut pw, mut s) = (l, 1.0 + l);
+                        let mut target = if t == 0 { 1.0 } else { s };
+                        for (j, &c) in INV_FACTORIAL.iter().enumerate().take(t + 1).skip(2) {
+                            pw *= l;
+                            s = pw.mul_add(c, s);
+                            if j == t {
+                                target = s;
+                            }
+                        }
+                        let u = target / exp_fma(l);
+                        let m = (u * 2f64.powi(52)).min(2f64.powi(52) - 3.0) as i64;
+                        let m = (m + rng.random_range(-2..=2i64)).max(0) as u64;
+                        m << 12 | low
+                    }
+                };
+                lam.push(l);
+                bits.push(b);
+            }
+            (lam, bits)
+        }
+
+        /// The inversion in single precision with neither margin nor redo.
+        fn plain_f32(l: f64, b: u64) -> u64 {
+            let l = l as f32;
+            let u = (b >> 40) as f32 * ULP_U * l.exp();
+            let (mut pw, mut s, mut k) = (l, 1.0 + l, u64::from(u >= 1.0));
+            for &c in &INV_FACTORIAL_F32[2..] {
+                if u < s {
+                    break;
+                }
+                k += 1;
+                pw *= l;
+                s = pw.mul_add(c, s);
+            }
+            k
+        }
+
+        /// The single-precision counts, certified or redone in `f64`, equal the portable
+        /// kernel's on lanes chosen to sit on the edges of the inversion, with eight terms
+        /// compared up front and with four.
+        #[test]
+        fn certified_counts_equal_the_portable_inversion() {
+            let Some(_) = Avx512::get(Simd::Auto) else {
+                return;
+            };
+            let (lam, bits) = hard_lanes(5, 64 * 400);
+            // Lanes where a plain single-precision inversion (no margin, no redo) would
+            // miscount: the lanes must be hard enough that the certification matters.
+            let mut plain_wrong = 0;
+            for (l, b) in lam.chunks_exact(64).zip(bits.chunks_exact(64)) {
+                let l: &[f64; 64] = l.try_into().expect("a block");
+                let b: &[u64; 64] = b.try_into().expect("a block");
+                for terms in [4, 8] {
+                    let mut want = [0u64; 64];
+                    if terms == 4 {
+                        poisson_block::<4>(l, b, &mut want);
+                    } else {
+                        poisson_block::<8>(l, b, &mut want);
+                    }
+                    for (q, &w) in want.iter().enumerate() {
+                        plain_wrong +=
+                            usize::from(l[q] <= RATE_INVERT && plain_f32(l[q], b[q]) != w);
+                    }
+                    for h in 0..2 {
+                        let r = 32 * h..32 * (h + 1);
+                        let lh: &[f64; 32] = l[r.clone()].try_into().expect("half");
+                        let bh: &[u64; 32] = b[r.clone()].try_into().expect("half");
+                        // SAFETY: the token exists only where the CPU has the features.
+                        #[allow(unsafe_code)]
+                        let got = unsafe { counts_of(lh, bh, terms) };
+                        for (q, (&g, &w)) in got.iter().zip(&want[r]).enumerate() {
+                            let q = 32 * h + q;
+                            assert_eq!(
+                                g as u64, w,
+                                "λ = {:e}, bits {:#x}, {terms} terms",
+                                l[q], b[q]
+                            );
+                        }
+                    }
+                }
+            }
+            assert!(plain_wrong > 100, "only {plain_wrong} lanes are hard");
+        }
     }
 }
