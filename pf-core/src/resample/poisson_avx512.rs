@@ -1,12 +1,13 @@
 //! The AVX-512 twin of [`poisson_counts`](super::poisson::poisson_counts): the same
 //! counts as the portable kernel, found in single precision and certified lane by lane.
 //!
-//! A block of 64 particles is two halves of four groups of eight. Each group steps its
+//! A block of 64 particles is four pairs of lane groups of eight. Each group steps its
 //! eight lanes of the [`LaneRng`] (the same draws as the portable lane step) and forms its
-//! rates in `f64`, so the rates' sums and the escapes above [`RATE_INVERT`](super::poisson::RATE_INVERT) are the
-//! portable kernel's. The inversion then runs sixteen lanes to a register in `f32`: the
-//! rate rounded, the uniform's top 24 bits, a single-precision `e^λ` ([`exp16`](x86::exp16)), and
-//! the partial sums `S_i = Σ_{k ≤ i} λ^k/k!`.
+//! rates in `f64`, so the rates' sums and the escapes above
+//! [`RATE_INVERT`](super::poisson::RATE_INVERT) are the portable kernel's. Each pair's
+//! inversion then runs in one register of sixteen `f32` lanes: the rate rounded, the
+//! uniform's top 24 bits, a single-precision `e^λ` ([`exp16`](x86::exp16)), and the partial
+//! sums `S_i = Σ_{k ≤ i} λ^k/k!`.
 //!
 //! **The certification.** Each lane counts its sums at or below
 //! `hi = (u₂₄ + 2⁻²⁴)·e^λ·(1 + δ)`, and its count stands only where the last of them is
@@ -26,17 +27,22 @@
 //! at or below `U` in `f64`, and every sum above `hi` above it: its count is the `f64`
 //! kernel's, bit for bit, with twice the margin needed.
 //!
-//! **Lanes that are not certified.** Near a sum (on the bench's weights a few lanes in 10⁵),
-//! a lane whose `f32` sum stops moving, and a lane still going at [`LAST_TERM`](x86::LAST_TERM) are not
-//! certified. Their pair of groups is redone by the `f64` inversion ([`counts64`](x86::counts64)), the
-//! portable kernel's operations in its order. A pair with a lane whose count reaches the
-//! compared terms continues in `f32` a term at a time, inline.
+//! **Lanes that are not certified.** Three kinds of lane are not certified:
+//! - a lane near a sum;
+//! - a lane whose `f32` sum stops moving;
+//! - a lane still going at [`LAST_TERM`](x86::LAST_TERM).
 //!
-//! Sixteen lanes to a register halve the inversion's chains. Multinomial resampling at
-//! N = 10⁶ took 3.04–3.10 ns against 3.49 with the `f64` inversion, and residual
-//! 3.23–3.34 against 3.60 (performance log, 2026-11-27, eighth session). The counts equal
-//! the portable kernel's: tested in `poisson`, in `multinomial`, and here on lanes built to
-//! sit on the sums.
+//! On the bench's weights at N = 10⁶ that is 1.7 lanes in 10⁴ for multinomial rates and 1.2
+//! for residual ones. Such a lane's pair of groups is redone by the `f64` inversion
+//! ([`counts64`](x86::counts64)), with the portable kernel's operations in its order. A pair
+//! with a lane whose count reaches the compared terms continues in `f32` a term at a time,
+//! inline.
+//!
+//! Sixteen lanes to a register halve the inversion's chains. At N = 10⁶, multinomial
+//! resampling took 3.03–3.10 ns against 3.49 with the `f64` inversion, and residual 3.05–3.10
+//! against 3.60 (best of interleaved rounds; performance log, 2026-11-27, eighth session).
+//! The counts equal the portable kernel's. That is tested in `poisson` and in `multinomial`,
+//! and here on lanes built to sit on the sums.
 
 use super::counts::Counts;
 use super::poisson::Rates;
@@ -138,7 +144,7 @@ mod x86 {
         let table = exp_table16();
         let zero = _mm512_setzero_pd();
         let mut sums = zero;
-        let mut inverted = _mm256_setzero_si256();
+        let mut inverted = _mm_setzero_si128();
         let mut total = 0usize;
         let mut wpad = [0.0f64; LANES];
         for (blk, wb) in w.chunks(LANES).enumerate() {
@@ -154,11 +160,13 @@ mod x86 {
             };
             let mut cb = [0u8; LANES];
             let mut escaped = 0u64;
-            for h in 0..LANES / 32 {
-                let g0 = 4 * h;
-                let bits: [__m512i; 4] = std::array::from_fn(|q| step8(lanes.state(), g0 + q));
-                let lam: [__m512d; 4] = std::array::from_fn(|q| {
-                    let x = load_pd(&wb[8 * (g0 + q)..8 * (g0 + q + 1)]);
+            // Sixteen particles at a time (a pair of lane groups): with two or four such
+            // registers side by side, as the `f64` inversion had been, residual resampling
+            // took 3.24 against 3.05 ns per particle at N = 10⁶ and multinomial the same.
+            for h in 0..LANES / 16 {
+                let bits: [__m512i; 2] = std::array::from_fn(|q| step8(lanes.state(), 2 * h + q));
+                let lam: [__m512d; 2] = std::array::from_fn(|q| {
+                    let x = load_pd(&wb[16 * h + 8 * q..16 * h + 8 * (q + 1)]);
                     let x = _mm512_mul_pd(_mm512_set1_pd(a), x);
                     if RESIDUALS {
                         // `x − ⌊x⌋` (the rounding is exact, as `floor_index`'s), times `b`.
@@ -172,22 +180,17 @@ mod x86 {
                 for l in lam {
                     sums = _mm512_add_pd(sums, l);
                 }
-                let esc: [__mmask8; 4] = std::array::from_fn(|q| {
+                let esc: [__mmask8; 2] = std::array::from_fn(|q| {
                     _mm512_cmp_pd_mask::<_CMP_GT_OQ>(lam[q], _mm512_set1_pd(RATE_INVERT))
                 });
-                let k = counts32(lam, bits, esc, terms, table);
-                // The 32 counts as bytes (each at most `MAX_TERM`), narrowed in registers and
-                // stored once (narrowing straight to memory, `vpmovdb` with a memory operand,
-                // is slow), and summed eight bytes to a lane.
-                let bytes =
-                    _mm256_set_m128i(_mm512_cvtepi32_epi8(k[1]), _mm512_cvtepi32_epi8(k[0]));
-                inverted =
-                    _mm256_add_epi64(inverted, _mm256_sad_epu8(bytes, _mm256_setzero_si256()));
-                let bytes: [u8; 32] = bytemuck::cast(bytes);
-                cb[32 * h..32 * (h + 1)].copy_from_slice(&bytes);
-                for (q, &e) in esc.iter().enumerate() {
-                    escaped |= u64::from(e) << (8 * (g0 + q));
-                }
+                // The sixteen counts as bytes (each at most `MAX_TERM`), narrowed in a
+                // register (narrowing straight to memory, `vpmovdb` with a memory operand, is
+                // slow), and summed eight bytes to a lane.
+                let k = _mm512_cvtepi32_epi8(counts16(lam, bits, esc, terms, table));
+                inverted = _mm_add_epi64(inverted, _mm_sad_epu8(k, _mm_setzero_si128()));
+                let k: [u8; 16] = bytemuck::cast(k);
+                cb[16 * h..16 * (h + 1)].copy_from_slice(&k);
+                escaped |= (u64::from(esc[0]) | u64::from(esc[1]) << 8) << (16 * h);
             }
             if len == LANES {
                 // A copy of constant length: inline stores, not a call to `memmove`.
@@ -204,7 +207,7 @@ mod x86 {
                 total = total.saturating_add(escape(counts, escaped, j0, &lam, rng));
             }
         }
-        let inverted: [u64; 4] = bytemuck::cast(inverted);
+        let inverted: [u64; 2] = bytemuck::cast(inverted);
         let sums: [f64; 8] = bytemuck::cast(sums);
         let inverted: u64 = inverted.iter().sum();
         (total.saturating_add(inverted as usize), sums.iter().sum())
@@ -264,73 +267,56 @@ mod x86 {
         _mm512_mul_ps(_mm512_cvtepi32_ps(top), _mm512_set1_ps(ULP_U))
     }
 
-    /// The counts of four groups of eight (rates `lam`, draws `bits`, escaped lanes `esc`)
-    /// as two registers of sixteen `i32`, each pair of groups in one: the inversion in
-    /// single precision, certified against the `f64` one lane by lane, and the `f64` one
-    /// ([`counts64`]) for a pair with a lane that is not. Escaped lanes count 0.
+    /// The counts of two groups of eight (rates `lam`, draws `bits`, escaped lanes `esc`)
+    /// as sixteen `i32`, the first group's first: the inversion in single precision,
+    /// certified against the `f64` one lane by lane, or the `f64` one ([`counts64`]) when a
+    /// lane is not. Escaped lanes count 0.
     #[inline]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
-    pub(super) fn counts32(
-        lam: [__m512d; 4],
-        bits: [__m512i; 4],
-        esc: [__mmask8; 4],
+    pub(super) fn counts16(
+        lam: [__m512d; 2],
+        bits: [__m512i; 2],
+        esc: [__mmask8; 2],
         terms: usize,
         table: __m512,
-    ) -> [__m512i; 2] {
+    ) -> __m512i {
         let one = _mm512_set1_ps(1.0);
-        let l: [__m512; 2] = std::array::from_fn(|q| pack16(lam[2 * q], lam[2 * q + 1]));
-        let unit: [__m512; 2] = std::array::from_fn(|q| unit16(bits[2 * q], bits[2 * q + 1]));
-        let esc16: [__mmask16; 2] =
-            std::array::from_fn(|q| u16::from(esc[2 * q]) | u16::from(esc[2 * q + 1]) << 8);
-        let e: [__m512; 2] = std::array::from_fn(|q| exp16(l[q], table));
+        let l = pack16(lam[0], lam[1]);
+        let unit = unit16(bits[0], bits[1]);
+        let esc16 = u16::from(esc[0]) | u16::from(esc[1]) << 8;
+        let e = exp16(l, table);
         // `u·e^λ` from above (the uniform's truncation and the margin) and from below.
-        let hi: [__m512; 2] = std::array::from_fn(|q| {
-            let u = _mm512_add_ps(unit[q], _mm512_set1_ps(ULP_U));
-            _mm512_mul_ps(_mm512_mul_ps(u, e[q]), _mm512_set1_ps(1.0 + DELTA))
-        });
-        let lo: [__m512; 2] = std::array::from_fn(|q| {
-            _mm512_mul_ps(_mm512_mul_ps(unit[q], e[q]), _mm512_set1_ps(1.0 - DELTA))
-        });
+        let u = _mm512_add_ps(unit, _mm512_set1_ps(ULP_U));
+        let hi = _mm512_mul_ps(_mm512_mul_ps(u, e), _mm512_set1_ps(1.0 + DELTA));
+        let lo = _mm512_mul_ps(_mm512_mul_ps(unit, e), _mm512_set1_ps(1.0 - DELTA));
         // `k`: the sums `S_0 = 1, S_1, …` at or below `hi`; `below`: the last of them (0
         // when none), which must be at or below `lo` too.
         let mut pw = l;
-        let mut s: [__m512; 2] = std::array::from_fn(|q| _mm512_add_ps(one, l[q]));
-        let mut k: [__m512i; 2] = std::array::from_fn(|q| {
-            let ge = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(hi[q], one);
-            _mm512_maskz_mov_epi32(ge, _mm512_set1_epi32(1))
-        });
-        let mut below: [__m512; 2] = std::array::from_fn(|q| {
-            _mm512_maskz_mov_ps(_mm512_cmp_ps_mask::<_CMP_GE_OQ>(hi[q], one), one)
-        });
-        let mut ge: [__mmask16; 2] =
-            std::array::from_fn(|q| _mm512_cmp_ps_mask::<_CMP_GE_OQ>(hi[q], s[q]));
+        let mut s = _mm512_add_ps(one, l);
+        let ge0 = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(hi, one);
+        let mut k = _mm512_maskz_mov_epi32(ge0, _mm512_set1_epi32(1));
+        let mut below = _mm512_maskz_mov_ps(ge0, one);
+        let mut ge = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(hi, s);
         for (i, &c) in INV_FACTORIAL_F32[..terms].iter().enumerate().skip(2) {
-            let (c, i) = (_mm512_set1_ps(c), _mm512_set1_epi32(i as i32));
-            for q in 0..2 {
-                k[q] = _mm512_mask_mov_epi32(k[q], ge[q], i);
-                below[q] = _mm512_mask_mov_ps(below[q], ge[q], s[q]);
-                pw[q] = _mm512_mul_ps(pw[q], l[q]);
-                s[q] = _mm512_fmadd_ps(pw[q], c, s[q]);
-                ge[q] = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(hi[q], s[q]);
-            }
+            k = _mm512_mask_mov_epi32(k, ge, _mm512_set1_epi32(i as i32));
+            below = _mm512_mask_mov_ps(below, ge, s);
+            pw = _mm512_mul_ps(pw, l);
+            s = _mm512_fmadd_ps(pw, _mm512_set1_ps(c), s);
+            ge = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(hi, s);
         }
-        std::array::from_fn(|q| {
-            let mut k = _mm512_mask_mov_epi32(k[q], ge[q], _mm512_set1_epi32(terms as i32));
-            let mut below = _mm512_mask_mov_ps(below[q], ge[q], s[q]);
-            let more = ge[q] & !esc16[q];
-            let unresolved = if more != 0 {
-                continue16(terms, &mut k, &mut below, l[q], hi[q], pw[q], s[q], more)
-            } else {
-                0
-            };
-            let near = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(below, lo[q]);
-            if (near | unresolved) & !esc16[q] != 0 {
-                let pair = |x: [__m512d; 4]| [x[2 * q], x[2 * q + 1]];
-                let bits = [bits[2 * q], bits[2 * q + 1]];
-                k = counts64(pair(lam), bits, [esc[2 * q], esc[2 * q + 1]], terms);
-            }
-            _mm512_maskz_mov_epi32(!esc16[q], k)
-        })
+        k = _mm512_mask_mov_epi32(k, ge, _mm512_set1_epi32(terms as i32));
+        below = _mm512_mask_mov_ps(below, ge, s);
+        let more = ge & !esc16;
+        let unresolved = if more != 0 {
+            continue16(terms, &mut k, &mut below, l, hi, pw, s, more)
+        } else {
+            0
+        };
+        let near = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(below, lo);
+        if (near | unresolved) & !esc16 != 0 {
+            k = counts64(lam, bits, esc, terms);
+        }
+        _mm512_maskz_mov_epi32(!esc16, k)
     }
 
     /// The single-precision inversion continued from term `from` for the lanes in `more`
@@ -454,7 +440,7 @@ mod x86 {
                 .collect()
         }
 
-        /// [`counts32`] of 32 lanes, with `terms` compared up front.
+        /// [`counts16`] of 32 lanes, sixteen at a time, with `terms` compared up front.
         #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
         fn counts_of(lam: &[f64; 32], bits: &[u64; 32], terms: usize) -> [i32; 32] {
             let l: [__m512d; 4] = std::array::from_fn(|q| load_pd(&lam[8 * q..8 * q + 8]));
@@ -465,7 +451,18 @@ mod x86 {
             let esc: [__mmask8; 4] = std::array::from_fn(|q| {
                 _mm512_cmp_pd_mask::<_CMP_GT_OQ>(l[q], _mm512_set1_pd(RATE_INVERT))
             });
-            bytemuck::cast(counts32(l, b, esc, terms, exp_table16()))
+            let table = exp_table16();
+            let k = [0, 1].map(|h| {
+                let k: [i32; 16] = bytemuck::cast(counts16(
+                    [l[2 * h], l[2 * h + 1]],
+                    [b[2 * h], b[2 * h + 1]],
+                    [esc[2 * h], esc[2 * h + 1]],
+                    terms,
+                    table,
+                ));
+                k
+            });
+            bytemuck::cast(k)
         }
 
         /// The single-precision `exp` is within 1.5·10⁻⁷ of `e^x` (taken in `f64`) over
