@@ -137,7 +137,10 @@ impl Rates {
     /// ten 2.77, twelve 3.30; with them, seven 1.99, eight 1.82, nine 1.81; scratch harness,
     /// 2026-11-27). Residual rates are at most about 1, where four leave `P(N ≥ 4) < 1.9 %`
     /// per particle: residual resampling at N = 10⁶ took 3.53–3.63 ns with four, 3.70–3.71
-    /// with five and 3.81 with three (criterion, 2026-11-27 evening).
+    /// with five and 3.81 with three (criterion, 2026-11-27 evening). The single-precision
+    /// AVX-512 counts keep both choices: seven terms took multinomial to 3.29–3.46 ns
+    /// against 3.03–3.22 and nine or ten gained nothing, and residual took 3.49 with three
+    /// and 3.30 with five against 3.24 (interleaved rounds, 2026-11-27, eighth session).
     pub(crate) const fn terms(self) -> usize {
         match self {
             Rates::Scaled(_) => 8,
