@@ -184,9 +184,7 @@ mod x86 {
                 for l in lam {
                     sums = _mm512_add_pd(sums, l);
                 }
-                let esc: [__mmask8; 2] = std::array::from_fn(|q| {
-                    _mm512_cmp_pd_mask::<_CMP_GT_OQ>(lam[q], _mm512_set1_pd(RATE_INVERT))
-                });
+                let esc = escapes(lam);
                 // The sixteen counts as bytes (each at most `MAX_TERM`), narrowed in a
                 // register (narrowing straight to memory, `vpmovdb` with a memory operand, is
                 // slow), and summed eight bytes to a lane.
@@ -194,7 +192,7 @@ mod x86 {
                 inverted = _mm_add_epi64(inverted, _mm_sad_epu8(k, _mm_setzero_si128()));
                 let k: [u8; 16] = bytemuck::cast(k);
                 cb[16 * h..16 * (h + 1)].copy_from_slice(&k);
-                escaped |= (u64::from(esc[0]) | u64::from(esc[1]) << 8) << (16 * h);
+                escaped |= u64::from(esc) << (16 * h);
             }
             if len == LANES {
                 // A copy of constant length: inline stores, not a call to `memmove`.
@@ -271,6 +269,15 @@ mod x86 {
         _mm512_mul_ps(_mm512_cvtepi32_ps(top), _mm512_set1_ps(ULP_U))
     }
 
+    /// The lanes of two groups of eight whose rate is above [`RATE_INVERT`] (drawn by
+    /// [`escape`] instead), the first group's in the low byte.
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    fn escapes(lam: [__m512d; 2]) -> __mmask16 {
+        let [a, b] = lam.map(|l| _mm512_cmp_pd_mask::<_CMP_GT_OQ>(l, _mm512_set1_pd(RATE_INVERT)));
+        u16::from(a) | u16::from(b) << 8
+    }
+
     /// The counts of two groups of eight (rates `lam`, draws `bits`, escaped lanes `esc`)
     /// as sixteen `i32`, the first group's first: the inversion in single precision,
     /// certified against the `f64` one lane by lane, or the `f64` one ([`counts64`]) when a
@@ -280,14 +287,13 @@ mod x86 {
     pub(super) fn counts16(
         lam: [__m512d; 2],
         bits: [__m512i; 2],
-        esc: [__mmask8; 2],
+        esc: __mmask16,
         terms: usize,
         table: __m512,
     ) -> __m512i {
         let one = _mm512_set1_ps(1.0);
         let l = pack16(lam[0], lam[1]);
         let unit = unit16(bits[0], bits[1]);
-        let esc16 = u16::from(esc[0]) | u16::from(esc[1]) << 8;
         let e = exp16(l, table);
         // `u·e^λ` from above (the uniform's truncation and the margin) and from below.
         let u = _mm512_add_ps(unit, _mm512_set1_ps(ULP_U));
@@ -310,17 +316,17 @@ mod x86 {
         }
         k = _mm512_mask_mov_epi32(k, ge, _mm512_set1_epi32(terms as i32));
         below = _mm512_mask_mov_ps(below, ge, s);
-        let more = ge & !esc16;
+        let more = ge & !esc;
         let unresolved = if more != 0 {
             continue16(terms, &mut k, &mut below, l, hi, pw, s, more)
         } else {
             0
         };
         let near = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(below, lo);
-        if (near | unresolved) & !esc16 != 0 {
+        if (near | unresolved) & !esc != 0 {
             k = counts64(lam, bits, esc, terms);
         }
-        _mm512_maskz_mov_epi32(!esc16, k)
+        _mm512_maskz_mov_epi32(!esc, k)
     }
 
     /// The single-precision inversion continued from term `from` for the lanes in `more`
@@ -366,7 +372,7 @@ mod x86 {
     pub(super) fn counts64(
         lam: [__m512d; 2],
         bits: [__m512i; 2],
-        esc: [__mmask8; 2],
+        esc: __mmask16,
         terms: usize,
     ) -> __m512i {
         let table = exp_table();
@@ -385,7 +391,7 @@ mod x86 {
                 ge = _mm512_cmp_pd_mask::<_CMP_GE_OQ>(u, s);
             }
             k = _mm512_mask_add_epi64(k, ge, k, ones);
-            let more = ge & !esc[q];
+            let more = ge & !((esc >> (8 * q)) as u8);
             if more != 0 {
                 k = continue_terms(terms, k, lam, u, pw, s, more);
             }
@@ -452,21 +458,46 @@ mod x86 {
                 let x: [u64; 8] = bits[8 * q..8 * q + 8].try_into().expect("eight lanes");
                 bytemuck::cast(x)
             });
-            let esc: [__mmask8; 4] = std::array::from_fn(|q| {
-                _mm512_cmp_pd_mask::<_CMP_GT_OQ>(l[q], _mm512_set1_pd(RATE_INVERT))
-            });
             let table = exp_table16();
             let k = [0, 1].map(|h| {
+                let lam = [l[2 * h], l[2 * h + 1]];
                 let k: [i32; 16] = bytemuck::cast(counts16(
-                    [l[2 * h], l[2 * h + 1]],
+                    lam,
                     [b[2 * h], b[2 * h + 1]],
-                    [esc[2 * h], esc[2 * h + 1]],
+                    escapes(lam),
                     terms,
                     table,
                 ));
                 k
             });
             bytemuck::cast(k)
+        }
+
+        /// The partial sums `S_0 … S_LAST_TERM` of rate `l` as the `f64` kernels form them.
+        fn sums64(l: f64) -> [f64; LAST_TERM + 1] {
+            let (mut pw, mut s) = (l, 1.0 + l);
+            let mut out = [1.0; LAST_TERM + 1];
+            out[1] = s;
+            for i in 2..=LAST_TERM {
+                pw *= l;
+                s = pw.mul_add(INV_FACTORIAL[i], s);
+                out[i] = s;
+            }
+            out
+        }
+
+        /// The same in single precision, as [`counts16`] forms them (scalar `f32` arithmetic
+        /// repeats its operations bit for bit).
+        fn sums32(l: f32) -> [f32; LAST_TERM + 1] {
+            let (mut pw, mut s) = (l, 1.0 + l);
+            let mut out = [1.0; LAST_TERM + 1];
+            out[1] = s;
+            for i in 2..=LAST_TERM {
+                pw *= l;
+                s = pw.mul_add(INV_FACTORIAL_F32[i], s);
+                out[i] = s;
+            }
+            out
         }
 
         /// The single-precision `exp` is within 1.5·10⁻⁷ of `e^x` (taken in `f64`) over
@@ -527,15 +558,8 @@ mod x86 {
                 let e64 = exp_fma(l);
                 let err = (f64::from(e) - e64).abs() / e64;
                 assert!(err <= 1e-6, "λ = {l}: e^λ off by {err:e}");
-                let (mut pw, mut s) = (l, 1.0 + l);
-                let (mut pw32, mut s32) = (m, 1.0 + m);
-                for i in 1..=LAST_TERM {
-                    if i > 1 {
-                        pw *= l;
-                        s = pw.mul_add(INV_FACTORIAL[i], s);
-                        pw32 *= m;
-                        s32 = pw32.mul_add(INV_FACTORIAL_F32[i], s32);
-                    }
+                let (s64, s32) = (sums64(l), sums32(m));
+                for (i, (&s, &s32)) in s64.iter().zip(&s32).enumerate().skip(1) {
                     let err = (f64::from(s32) - s).abs() / s;
                     let bound = (3 * i + 1) as f64 * ulp;
                     assert!(err <= bound, "λ = {l}, sum {i}: off by {err:e} > {bound:e}");
@@ -569,16 +593,7 @@ mod x86 {
                         // A partial sum S_t as the kernels form it, and u = S_t/e^λ give or
                         // take two steps of 2⁻⁵².
                         let t = rng.random_range(0..=(l as usize + 10).min(28));
-                        let (mut pw, mut s) = (l, 1.0 + l);
-                        let mut target = if t == 0 { 1.0 } else { s };
-                        for (j, &c) in INV_FACTORIAL.iter().enumerate().take(t + 1).skip(2) {
-                            pw *= l;
-                            s = pw.mul_add(c, s);
-                            if j == t {
-                                target = s;
-                            }
-                        }
-                        let u = target / exp_fma(l);
+                        let u = sums64(l)[t] / exp_fma(l);
                         let m = (u * 2f64.powi(52)).min(2f64.powi(52) - 3.0) as i64;
                         let m = (m + rng.random_range(-2..=2i64)).max(0) as u64;
                         m << 12 | low
@@ -594,16 +609,7 @@ mod x86 {
         fn plain_f32(l: f64, b: u64) -> u64 {
             let l = l as f32;
             let u = (b >> 40) as f32 * ULP_U * l.exp();
-            let (mut pw, mut s, mut k) = (l, 1.0 + l, u64::from(u >= 1.0));
-            for &c in &INV_FACTORIAL_F32[2..] {
-                if u < s {
-                    break;
-                }
-                k += 1;
-                pw *= l;
-                s = pw.mul_add(c, s);
-            }
-            k
+            sums32(l).iter().take_while(|&&s| u >= s).count() as u64
         }
 
         /// The single-precision counts, certified or redone in `f64`, equal the portable
