@@ -14,6 +14,13 @@ pub(crate) struct Counts {
     pub(crate) small: Vec<u8>,
     /// `(particle, count)` for every particle marked [`Counts::BIG`], ascending.
     pub(crate) big: Vec<(usize, usize)>,
+    /// Each particle's whole run before removals, its base copies (residual resampling's
+    /// floor `⌊M·W_j⌋`) plus its count, or [`Counts::BIG`] from 255 up (and for a count in
+    /// the side list). Filled by the counting pass, which has the floor at hand, so that the
+    /// writer of the runs needs no pass over the weights: see [`Counts::runs`].
+    pub(crate) runs: Vec<u8>,
+    /// Whether `runs` holds the current counts.
+    pub(crate) runs_set: bool,
 }
 
 impl Counts {
@@ -24,6 +31,8 @@ impl Counts {
         Counts {
             small: Vec::new(),
             big: Vec::new(),
+            runs: Vec::new(),
+            runs_set: false,
         }
     }
 
@@ -31,12 +40,21 @@ impl Counts {
     pub(crate) fn reset(&mut self, n: usize) {
         self.small.resize(n, 0);
         self.big.clear();
+        self.runs_set = false;
+    }
+
+    /// The runs before removals (see the field), if the counting pass set them and no
+    /// change to the counts since has left them stale.
+    pub(crate) fn runs(&self) -> Option<&[u8]> {
+        self.runs_set.then_some(&self.runs[..])
     }
 
     /// Set particle `j`'s count. Counts of [`Counts::BIG`] or more must be set in ascending
-    /// `j`, as the rounds do.
+    /// `j`, as the rounds do. The runs go stale (the counting passes set them after
+    /// their counts).
     #[inline(always)]
     pub(crate) fn set(&mut self, j: usize, c: usize) {
+        self.runs_set = false;
         if c < usize::from(Self::BIG) {
             self.small[j] = c as u8;
         } else {
@@ -56,6 +74,10 @@ impl Counts {
 
     /// Add `c` to particle `j`'s count (the rare extra draws of one particle).
     pub(crate) fn add_to(&mut self, j: usize, c: usize) {
+        if self.runs_set {
+            // 255 stays 255: the run is looked up either way.
+            self.runs[j] = self.runs[j].saturating_add(c.min(255) as u8);
+        }
         let sum = self.get(j).saturating_add(c);
         match self.small[j] {
             Self::BIG => {
@@ -75,6 +97,7 @@ impl Counts {
     /// short total up), in one pass.
     pub(crate) fn add(&mut self, other: &Counts) {
         debug_assert_eq!(self.small.len(), other.small.len());
+        self.runs_set = false;
         let (mut mine, mut theirs) = (0, 0);
         let mut big = Vec::new();
         for (j, (a, &b)) in self.small.iter_mut().zip(&other.small).enumerate() {
@@ -139,5 +162,36 @@ mod tests {
             c.set(j, j);
         }
         assert_eq!(c.to_vec(), [0, 1, 2, 3, 4, 5]);
+    }
+
+    /// The runs follow the extra draws of one particle (saturating at the mark), and go
+    /// stale with a set count, another round's counts or a reset.
+    #[test]
+    fn runs_follow_the_counts_or_go_stale() {
+        let mut c = Counts::new();
+        let fill = |c: &mut Counts| {
+            c.reset(4);
+            for j in 0..4 {
+                c.set(j, j);
+            }
+            c.runs = vec![3, 250, 255, 0];
+            c.runs_set = true;
+        };
+        fill(&mut c);
+        c.add_to(0, 2);
+        c.add_to(1, 7);
+        c.add_to(2, 1);
+        c.add_to(3, 1000);
+        assert_eq!(c.runs(), Some(&[5u8, 255, 255, 255][..]));
+        c.set(0, 1);
+        assert_eq!(c.runs(), None);
+        fill(&mut c);
+        let mut other = Counts::new();
+        other.reset(4);
+        c.add(&other);
+        assert_eq!(c.runs(), None);
+        fill(&mut c);
+        c.reset(4);
+        assert_eq!(c.runs(), None);
     }
 }

@@ -145,6 +145,10 @@ mod x86 {
             Rates::Scaled(a)
         };
         let terms = rates.terms();
+        if RESIDUALS {
+            // Every byte is written below.
+            counts.runs.resize(w.len(), 0);
+        }
         let table = exp_table16();
         let zero = _mm512_setzero_pd();
         let mut sums = zero;
@@ -163,18 +167,21 @@ mod x86 {
                 &wpad[..]
             };
             let mut cb = [0u8; LANES];
+            let mut rb = [0u8; LANES];
             let mut escaped = 0u64;
             // Sixteen particles at a time (a pair of lane groups): with two or four such
             // registers side by side, as the `f64` inversion had been, residual resampling
             // took 3.24 against 3.05 ns per particle at N = 10⁶ and multinomial the same.
             for h in 0..LANES / 16 {
                 let bits: [__m512i; 2] = std::array::from_fn(|q| step8(lanes.state(), 2 * h + q));
+                let mut floors = [zero; 2];
                 let lam: [__m512d; 2] = std::array::from_fn(|q| {
                     let x = load_pd(&wb[16 * h + 8 * q..16 * h + 8 * (q + 1)]);
                     let x = _mm512_mul_pd(_mm512_set1_pd(a), x);
                     if RESIDUALS {
                         // `x − ⌊x⌋` (the rounding is exact, as `floor_index`'s), times `b`.
                         let f = _mm512_roundscale_pd::<FLOOR>(x);
+                        floors[q] = f;
                         _mm512_mul_pd(_mm512_sub_pd(x, f), _mm512_set1_pd(b))
                     } else {
                         // `max(x, 0)` returns its second operand unless `x > 0`: `rate_of`.
@@ -188,10 +195,15 @@ mod x86 {
                 // The sixteen counts as bytes (each at most `MAX_TERM`), narrowed in a
                 // register (narrowing straight to memory, `vpmovdb` with a memory operand, is
                 // slow), and summed eight bytes to a lane.
-                let k = _mm512_cvtepi32_epi8(counts16(lam, bits, esc, terms, table));
+                let k32 = counts16(lam, bits, esc, terms, table);
+                let k = _mm512_cvtepi32_epi8(k32);
                 inverted = _mm_add_epi64(inverted, _mm_sad_epu8(k, _mm_setzero_si128()));
                 let k: [u8; 16] = bytemuck::cast(k);
                 cb[16 * h..16 * (h + 1)].copy_from_slice(&k);
+                if RESIDUALS {
+                    let r: [u8; 16] = bytemuck::cast(runs16(floors, k32, esc));
+                    rb[16 * h..16 * (h + 1)].copy_from_slice(&r);
+                }
                 escaped |= u64::from(esc) << (16 * h);
             }
             if len == LANES {
@@ -200,8 +212,17 @@ mod x86 {
                     .try_into()
                     .expect("a full block");
                 *to = cb;
+                if RESIDUALS {
+                    let to: &mut [u8; LANES] = (&mut counts.runs[j0..j0 + LANES])
+                        .try_into()
+                        .expect("a full block");
+                    *to = rb;
+                }
             } else {
                 counts.small[j0..j0 + len].copy_from_slice(&cb[..len]);
+                if RESIDUALS {
+                    counts.runs[j0..j0 + len].copy_from_slice(&rb[..len]);
+                }
             }
             if escaped != 0 {
                 let lam: [f64; LANES] =
@@ -209,6 +230,7 @@ mod x86 {
                 total = total.saturating_add(escape(counts, escaped, j0, &lam, rng));
             }
         }
+        counts.runs_set = RESIDUALS;
         let inverted: [u64; 2] = bytemuck::cast(inverted);
         let sums: [f64; 8] = bytemuck::cast(sums);
         let inverted: u64 = inverted.iter().sum();
@@ -267,6 +289,20 @@ mod x86 {
         let high = _mm512_set_epi32(31, 29, 27, 25, 23, 21, 19, 17, 15, 13, 11, 9, 7, 5, 3, 1);
         let top = _mm512_srli_epi32::<8>(_mm512_permutex2var_epi32(a, high, b));
         _mm512_mul_ps(_mm512_cvtepi32_ps(top), _mm512_set1_ps(ULP_U))
+    }
+
+    /// The runs of two groups of eight before removals (see [`Counts::runs`]): floors `f`
+    /// plus counts `k`, as bytes saturated at 255, and 255 for the escaped lanes `esc`
+    /// (whose counts come later).
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    fn runs16(f: [__m512d; 2], k: __m512i, esc: __mmask16) -> __m128i {
+        // Floors from 255 up saturate the same as below it, and the conversion then stays
+        // in range whatever `M`.
+        let [lo, hi] = f.map(|f| _mm512_cvttpd_epi32(_mm512_min_pd(f, _mm512_set1_pd(255.0))));
+        let f = _mm512_inserti64x4::<1>(_mm512_castsi256_si512(lo), hi);
+        let r = _mm512_mask_mov_epi32(_mm512_add_epi32(f, k), esc, _mm512_set1_epi32(255));
+        _mm512_cvtusepi32_epi8(r)
     }
 
     /// The lanes of two groups of eight whose rate is above [`RATE_INVERT`] (drawn by
