@@ -166,8 +166,11 @@ mod x86 {
                 wpad[len..].fill(0.0);
                 &wpad[..]
             };
-            let mut cb = [0u8; LANES];
-            let mut rb = [0u8; LANES];
+            // The block's count bytes and floor bytes, sixteen moved in per pair at the top of
+            // a register: staged in arrays instead, each block's 64-byte reload of its four
+            // 16-byte stores waited for them to reach the cache (no store forwarding).
+            let mut cb = _mm512_setzero_si512();
+            let mut fb = _mm512_setzero_si512();
             let mut escaped = 0u64;
             // Sixteen particles at a time (a pair of lane groups): with two or four such
             // registers side by side, as the `f64` inversion had been, residual resampling
@@ -191,21 +194,24 @@ mod x86 {
                 for l in lam {
                     sums = _mm512_add_pd(sums, l);
                 }
+                if RESIDUALS {
+                    fb = shift_in(fb, bytes16(floors));
+                }
                 let esc = escapes(lam);
                 // The sixteen counts as bytes (each at most `MAX_TERM`), narrowed in a
                 // register (narrowing straight to memory, `vpmovdb` with a memory operand, is
                 // slow), and summed eight bytes to a lane.
-                let k32 = counts16(lam, bits, esc, terms, table);
-                let k = _mm512_cvtepi32_epi8(k32);
+                let k = _mm512_cvtepi32_epi8(counts16(lam, bits, esc, terms, table));
                 inverted = _mm_add_epi64(inverted, _mm_sad_epu8(k, _mm_setzero_si128()));
-                let k: [u8; 16] = bytemuck::cast(k);
-                cb[16 * h..16 * (h + 1)].copy_from_slice(&k);
-                if RESIDUALS {
-                    let r: [u8; 16] = bytemuck::cast(runs16(floors, k32, esc));
-                    rb[16 * h..16 * (h + 1)].copy_from_slice(&r);
-                }
+                cb = shift_in(cb, k);
                 escaped |= u64::from(esc) << (16 * h);
             }
+            // The runs: floors plus counts, saturated, and 255 for the escaped lanes (whose
+            // counts come later), a block at a time: with the floors kept in registers
+            // through the inversion, the rates' sums went to the stack, a chain through
+            // memory.
+            let rb = _mm512_mask_mov_epi8(_mm512_adds_epu8(fb, cb), escaped, _mm512_set1_epi8(-1));
+            let (cb, rb): ([u8; LANES], [u8; LANES]) = (bytemuck::cast(cb), bytemuck::cast(rb));
             if len == LANES {
                 // A copy of constant length: inline stores, not a call to `memmove`.
                 let to: &mut [u8; LANES] = (&mut counts.small[j0..j0 + LANES])
@@ -291,18 +297,21 @@ mod x86 {
         _mm512_mul_ps(_mm512_cvtepi32_ps(top), _mm512_set1_ps(ULP_U))
     }
 
-    /// The runs of two groups of eight before removals (see [`Counts::runs`]): floors `f`
-    /// plus counts `k`, as bytes saturated at 255, and 255 for the escaped lanes `esc`
-    /// (whose counts come later).
+    /// `v` moved down sixteen bytes, and `x` in at the top.
     #[inline]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
-    fn runs16(f: [__m512d; 2], k: __m512i, esc: __mmask16) -> __m128i {
-        // Floors from 255 up saturate the same as below it, and the conversion then stays
-        // in range whatever `M`.
+    fn shift_in(v: __m512i, x: __m128i) -> __m512i {
+        _mm512_alignr_epi64::<2>(_mm512_castsi128_si512(x), v)
+    }
+
+    /// The floors `f` of two groups of eight as bytes, saturated at 255, the first group's
+    /// first (from 255 up they saturate the same, and the conversion stays in range
+    /// whatever `M`).
+    #[inline]
+    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
+    fn bytes16(f: [__m512d; 2]) -> __m128i {
         let [lo, hi] = f.map(|f| _mm512_cvttpd_epi32(_mm512_min_pd(f, _mm512_set1_pd(255.0))));
-        let f = _mm512_inserti64x4::<1>(_mm512_castsi256_si512(lo), hi);
-        let r = _mm512_mask_mov_epi32(_mm512_add_epi32(f, k), esc, _mm512_set1_epi32(255));
-        _mm512_cvtusepi32_epi8(r)
+        _mm512_cvtusepi32_epi8(_mm512_inserti64x4::<1>(_mm512_castsi256_si512(lo), hi))
     }
 
     /// The lanes of two groups of eight whose rate is above [`RATE_INVERT`] (drawn by
