@@ -68,8 +68,9 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
         } = &mut *cell.borrow_mut();
         // The first round assumes weights summing to 1 and measures their mass; it is redone,
         // normalised, when the mass is off by more than rounding.
-        let mean = round_mean(m);
-        let (mut t, rates) = poisson_counts(simd, counts, w, Rates::Scaled(mean), &mut lanes, rng);
+        let mean = round_mean(m as f64);
+        let first_round = poisson_counts(simd, counts, w, Rates::Scaled(mean), &mut lanes, rng);
+        let (mut t, rates) = (first_round.total, first_round.rates);
         let mass = rates / mean;
         if !(mass > 0.0 && mass.is_finite()) {
             out.fill(first + n - 1);
@@ -77,12 +78,12 @@ pub(crate) fn multinomial_draws<R: Rng + ?Sized>(
         }
         if (mass - 1.0).abs() > 1e-6 {
             let s = mean / mass;
-            t = poisson_counts(simd, counts, w, Rates::Scaled(s), &mut lanes, rng).0;
+            t = poisson_counts(simd, counts, w, Rates::Scaled(s), &mut lanes, rng).total;
         }
         while t < m {
-            let s = round_mean(m - t) / mass;
+            let s = round_mean((m - t) as f64) / mass;
             t = t.saturating_add(
-                poisson_counts(simd, extra, w, Rates::Scaled(s), &mut lanes, rng).0,
+                poisson_counts(simd, extra, w, Rates::Scaled(s), &mut lanes, rng).total,
             );
             counts.add(extra);
         }

@@ -72,13 +72,12 @@ pub(crate) fn distinct_sorted<R: Rng + ?Sized>(
 }
 
 /// Standard deviations of a Poisson total by which a round overshoots its target.
-const OVERSHOOT: f64 = 3.0;
+pub(crate) const OVERSHOOT: f64 = 3.0;
 
 /// The mean total of a round of Poisson counts that must bring `d` more draws: `d` plus
 /// [`OVERSHOOT`] standard deviations, so that it falls short about once in a thousand
 /// rounds, and the surplus to remove (about `3√d`) costs little.
-pub(crate) fn round_mean(d: usize) -> f64 {
-    let d = d as f64;
+pub(crate) fn round_mean(d: f64) -> f64 {
     d + OVERSHOOT * d.sqrt() + 1.0
 }
 
@@ -149,10 +148,27 @@ impl Rates {
     }
 }
 
+/// What a pass of [`poisson_counts`] found besides the counts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Tally {
+    /// The sum of the counts (saturating).
+    pub(crate) total: usize,
+    /// The sum of the rates, in eight partial sums (lane `j mod 8` of each block of 64 into
+    /// sum `j mod 8`, in order).
+    pub(crate) rates: f64,
+    /// For [`Rates::Residuals`]: the sum of the floors `⌊a·w_j⌋`, exact for weights in
+    /// [0, 1] (integers below 2⁵³ in any order); 0 otherwise.
+    pub(crate) floors: f64,
+    /// For [`Rates::Residuals`]: whether every weight lies in [0, 1] (no NaN), which the
+    /// floors and rates assume; `true` otherwise.
+    pub(crate) clean: bool,
+}
+
 /// `counts[j] ←` a Poisson(`λ_j`) count, `λ_j` from `w_j` by `rates` (see [`Rates`]),
-/// independent across particles. Returns the sum of the counts (saturating) and the
-/// sum of the rates (in eight partial sums, lane `j mod 8` of each block of 64 into sum
-/// `j mod 8`, in order).
+/// independent across particles; with residual rates, also the runs' bytes
+/// ([`Counts::runs`]). Returns the sums and the check of the weights (see [`Tally`]): for
+/// residual resampling, a first round that can start before the floors are known reads
+/// the weights once.
 ///
 /// Inversion of one lane uniform `u` per particle (a lane step per 64 particles): the count
 /// is the number of `i ≥ 0` with `U ≥ S_i`, where `U = u·e^λ` and `S_i = Σ_{k ≤ i} λ^k/k!`,
@@ -177,7 +193,7 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
     rates: Rates,
     lanes: &mut LaneRng,
     rng: &mut R,
-) -> (usize, f64) {
+) -> Tally {
     counts.reset(w.len());
     if let Some(cpu) = Avx512::get(simd) {
         return super::poisson_avx512::poisson_counts(cpu, counts, w, rates, lanes, rng);
@@ -204,9 +220,10 @@ fn poisson_counts_portable<const T: usize, R: Rng + ?Sized>(
     rates: Rates,
     lanes: &mut LaneRng,
     rng: &mut R,
-) -> (usize, f64) {
+) -> Tally {
     let mut total = 0usize;
     let mut sums = [0.0f64; 8];
+    let (mut floor_sum, mut outside) = (0.0, false);
     let mut bits = [0u64; LANES];
     let mut lam = [0.0f64; LANES];
     let mut k = [0u64; LANES];
@@ -239,10 +256,13 @@ fn poisson_counts_portable<const T: usize, R: Rng + ?Sized>(
         total += k[..len].iter().sum::<u64>() as usize;
         let escaped = escaped & (u64::MAX >> (LANES - len));
         if let Some(a) = floors {
-            // The floors and counts as the AVX-512 twin's `runs16` forms them.
+            // The floors and counts as the AVX-512 twin forms them, saturated at 255.
             let runs = counts.runs[j0..j0 + len].iter_mut();
             for (q, (r, (&w, &k))) in runs.zip(wb.iter().zip(&k)).enumerate() {
-                let run = (floor_index(a * w).0.min(255) as u64 + k).min(255);
+                let (f, ff) = floor_index(a * w);
+                floor_sum += ff;
+                outside |= !(0.0..=1.0).contains(&w);
+                let run = (f.min(255) as u64 + k).min(255);
                 *r = if escaped >> q & 1 == 0 {
                     run as u8
                 } else {
@@ -253,7 +273,12 @@ fn poisson_counts_portable<const T: usize, R: Rng + ?Sized>(
         total = total.saturating_add(escape(counts, escaped, j0, &lam, rng));
     }
     counts.runs_set = floors.is_some();
-    (total, sums.iter().sum())
+    Tally {
+        total,
+        rates: sums.iter().sum(),
+        floors: floor_sum,
+        clean: !outside,
+    }
 }
 
 /// The rate of a scaled weight `x`: `x`, or 0 where `x` is negative, zero or NaN (so that no
@@ -767,8 +792,11 @@ mod tests {
                 } else {
                     &mut extra
                 };
-                let (total, rate_sum) =
-                    poisson_counts(simd, into, &w, Rates::Scaled(1.0), &mut lanes, &mut rng);
+                let Tally {
+                    total,
+                    rates: rate_sum,
+                    ..
+                } = poisson_counts(simd, into, &w, Rates::Scaled(1.0), &mut lanes, &mut rng);
                 assert_eq!(total, into.to_vec().iter().sum::<usize>());
                 let want: f64 = w.iter().sum();
                 assert!(
@@ -837,34 +865,44 @@ mod tests {
                 let mut rng = stream_rng(21, case as u64);
                 let mut lanes = LaneRng::from_rng(&mut rng);
                 let mut counts = Counts::new();
-                let (t, sum) = poisson_counts(simd, &mut counts, w, rates, &mut lanes, &mut rng);
+                let tally = poisson_counts(simd, &mut counts, w, rates, &mut lanes, &mut rng);
                 let mut after = [0u64; LANES];
                 lanes.step(&mut after);
                 let runs = counts.runs().map(<[u8]>::to_vec);
-                (
-                    counts.to_vec(),
-                    runs,
-                    t,
-                    sum.to_bits(),
-                    after,
-                    rng.next_u64(),
-                )
+                // The floors' sum means nothing once a weight lies outside [0, 1].
+                let floors = tally.clean.then_some(tally.floors);
+                let tally = (tally.total, tally.rates.to_bits(), floors, tally.clean);
+                (counts.to_vec(), runs, tally, after, rng.next_u64())
             };
+            // Residual weights with one outside [0, 1], which every kernel reports.
+            let mut outside = residual.clone();
+            outside[n / 2] = [f64::NAN, -1e-300, 1.5][case % 3];
             for (w, rates) in [
                 (&w, Rates::Scaled(1.3)),
                 (&residual, Rates::Residuals { a: mf, b: 1.7 }),
+                (&outside, Rates::Residuals { a: mf, b: 1.7 }),
             ] {
                 let auto = run(Simd::Auto, w, rates);
                 assert_eq!(auto, run(Simd::Avx2, w, rates), "N = {n}, {rates:?}");
                 assert_eq!(auto, run(Simd::Portable, w, rates), "N = {n}, {rates:?}");
+                let residuals = matches!(rates, Rates::Residuals { .. });
+                let inside = w.iter().all(|w| (0.0..=1.0).contains(w));
+                assert_eq!(auto.2.3, !residuals || inside, "N = {n}, {rates:?}");
+                if inside {
+                    let floors: f64 = w.iter().map(|&w| (mf * w).floor()).sum();
+                    let want = if residuals { floors } else { 0.0 };
+                    assert_eq!(auto.2.2, Some(want), "N = {n}");
+                }
                 // Residual rates leave each particle's floor plus count, saturated at 255
                 // (floors past 255 among these weights once N passes 255).
-                let want = matches!(rates, Rates::Residuals { .. }).then(|| {
+                let want = (residuals && inside).then(|| {
                     let floors = w.iter().map(|&w| floor_index(mf * w).0);
                     let runs = floors.zip(&auto.0).map(|(f, &c)| (f + c).min(255) as u8);
                     runs.collect::<Vec<u8>>()
                 });
-                assert_eq!(auto.1, want, "N = {n}, {rates:?}");
+                if inside {
+                    assert_eq!(auto.1, want, "N = {n}, {rates:?}");
+                }
             }
             let big = run(Simd::Auto, &w, Rates::Scaled(1.3)).0;
             assert!(big.iter().any(|&c| c >= usize::from(Counts::BIG)) || n < 13 * 8);

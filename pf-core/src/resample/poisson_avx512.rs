@@ -49,7 +49,7 @@
 //! and here on lanes built to sit on the sums.
 
 use super::counts::Counts;
-use super::poisson::Rates;
+use super::poisson::{Rates, Tally};
 use crate::simd::LaneRng;
 use crate::simd::avx512::{Avx512, on_avx512};
 use rand::Rng;
@@ -63,7 +63,7 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
     rates: Rates,
     lanes: &mut LaneRng,
     rng: &mut R,
-) -> (usize, f64) {
+) -> Tally {
     match rates {
         Rates::Scaled(a) => on_avx512!(
             cpu,
@@ -81,7 +81,7 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::super::counts::Counts;
-    use super::super::poisson::{INV_FACTORIAL, RATE_INVERT, Rates, escape};
+    use super::super::poisson::{INV_FACTORIAL, RATE_INVERT, Rates, Tally, escape};
     use crate::simd::avx512::x86::{exp_fma8, exp_table, load_pd, step8, unit8};
     use crate::simd::math::EXP2_16THS;
     use crate::simd::{LANES, LaneRng};
@@ -138,7 +138,7 @@ mod x86 {
         b: f64,
         lanes: &mut LaneRng,
         rng: &mut R,
-    ) -> (usize, f64) {
+    ) -> Tally {
         let rates = if RESIDUALS {
             Rates::Residuals { a, b }
         } else {
@@ -154,6 +154,11 @@ mod x86 {
         let mut sums = zero;
         let mut inverted = _mm_setzero_si128();
         let mut total = 0usize;
+        // The floors' sum: a block's bytes summed eight to a lane, or, where one saturates,
+        // its floors in `f64` (rare: only weights of `255/M` or more).
+        let mut floor_bytes = _mm512_setzero_si512();
+        let mut floor_sum = 0.0;
+        let mut outside: __mmask8 = 0;
         let mut wpad = [0.0f64; LANES];
         for (blk, wb) in w.chunks(LANES).enumerate() {
             let (j0, len) = (blk * LANES, wb.len());
@@ -179,9 +184,13 @@ mod x86 {
                 let bits: [__m512i; 2] = std::array::from_fn(|q| step8(lanes.state(), 2 * h + q));
                 let mut floors = [zero; 2];
                 let lam: [__m512d; 2] = std::array::from_fn(|q| {
-                    let x = load_pd(&wb[16 * h + 8 * q..16 * h + 8 * (q + 1)]);
-                    let x = _mm512_mul_pd(_mm512_set1_pd(a), x);
+                    let w = load_pd(&wb[16 * h + 8 * q..16 * h + 8 * (q + 1)]);
+                    let x = _mm512_mul_pd(_mm512_set1_pd(a), w);
                     if RESIDUALS {
+                        // Ordered comparisons: a NaN weight is outside.
+                        let inside = _mm512_cmp_pd_mask::<_CMP_GE_OQ>(w, zero)
+                            & _mm512_cmp_pd_mask::<_CMP_LE_OQ>(w, _mm512_set1_pd(1.0));
+                        outside |= !inside;
                         // `x − ⌊x⌋` (the rounding is exact, as `floor_index`'s), times `b`.
                         let f = _mm512_roundscale_pd::<FLOOR>(x);
                         floors[q] = f;
@@ -211,6 +220,14 @@ mod x86 {
             // through the inversion, the rates' sums went to the stack, a chain through
             // memory.
             let rb = _mm512_mask_mov_epi8(_mm512_adds_epu8(fb, cb), escaped, _mm512_set1_epi8(-1));
+            if RESIDUALS {
+                if _mm512_cmpeq_epi8_mask(fb, _mm512_set1_epi8(-1)) == 0 {
+                    let sums = _mm512_sad_epu8(fb, _mm512_setzero_si512());
+                    floor_bytes = _mm512_add_epi64(floor_bytes, sums);
+                } else {
+                    floor_sum += wb.iter().map(|&w| (a * w).floor()).sum::<f64>();
+                }
+            }
             let (cb, rb): ([u8; LANES], [u8; LANES]) = (bytemuck::cast(cb), bytemuck::cast(rb));
             if len == LANES {
                 // A copy of constant length: inline stores, not a call to `memmove`.
@@ -240,7 +257,13 @@ mod x86 {
         let inverted: [u64; 2] = bytemuck::cast(inverted);
         let sums: [f64; 8] = bytemuck::cast(sums);
         let inverted: u64 = inverted.iter().sum();
-        (total.saturating_add(inverted as usize), sums.iter().sum())
+        let floor_bytes: [u64; 8] = bytemuck::cast(floor_bytes);
+        Tally {
+            total: total.saturating_add(inverted as usize),
+            rates: sums.iter().sum(),
+            floors: floor_sum + floor_bytes.iter().sum::<u64>() as f64,
+            clean: outside == 0,
+        }
     }
 
     /// The table of [`exp16`].

@@ -2,8 +2,10 @@
 //! particle from Poisson counts.
 
 use super::Resample;
+use super::counts::Counts;
+use super::offspring::SCAN;
 use super::poisson::{
-    DrawBuffers, Floors, Rates, distinct_sorted, poisson_counts, round_mean, write_runs,
+    DrawBuffers, Floors, OVERSHOOT, Rates, distinct_sorted, poisson_counts, round_mean, write_runs,
 };
 use crate::simd::avx512::Avx512;
 use crate::simd::math::floor_index;
@@ -22,7 +24,9 @@ use std::cell::RefCell;
 /// 1. **Poissonisation.** Particle `j` gets a Poisson(`Λ·r_j`) count, independent across
 ///    particles. `Λ·R = R + 3√R + 1`, so that the total `T`, Poisson(`Λ·R`), falls short of
 ///    `R` with probability about 10⁻³; then further rounds add counts (independent Poisson
-///    counts add up to Poisson counts).
+///    counts add up to Poisson counts). The first round's `Λ` is planned from a sample of
+///    the weights, so that its pass also sums the floors (see `first_rate`): any `Λ` gives
+///    the same law.
 /// 2. **Conditioning on `R`.** Given `T`, the counted draws are `T` independent draws from
 ///    `r/R`; a uniformly chosen subset of `T − R` of them (about `3√R`, from the caller's
 ///    generator) is removed, which leaves `R` independent draws.
@@ -175,83 +179,153 @@ pub(crate) fn residual_draws<R: Rng + ?Sized>(
     if n == 0 || m == 0 {
         return;
     }
-    let (sums, ok) = match block {
-        Some(sums) => (sums, true),
-        None => floors_and_mass(simd, w, mf),
-    };
-    let (floors, mass) = (sums.floors, sums.mass);
-    if !ok {
-        // Outside the contract (a NaN, negative or above-1 weight, where the floors would
-        // mean nothing): such weights count as 0, or 1 above it, on a cleaned copy (an
-        // allocation on this path only).
-        let clean: Vec<f64> = w.iter().map(|&x| clean(x)).collect();
-        return residual_draws(simd, &clean, mf, None, first, rng, out);
-    }
-    let r = m.saturating_sub(floors);
-    // The draws are from `r_j/R`. Weights summing short of 1 leave `Σ r_j < R`; the missing
-    // mass goes to the last particle (where the cumulative-weight schemes put it), as an
-    // extra rate `e`. Weights summing past 1 give the draws of `r_j/Σ r_j`. Each round's
-    // candidate rate is set so that its counts have the mean it needs in all (`Σ keep + e`).
-    let rf = r as f64;
-    let (scale, e, keep_total) = if block.is_some() && mass > 0.0 {
-        // Counts in proportion to `r_j` whatever their sum: keep probabilities
-        // `r_j/max r_j` (rounded down, so at most 1), and the candidates' rate carries the
-        // normalisation. With the largest keep probability 1, a round keeps at least as
-        // many candidates as one particle has, so a block whose residual mass is far below
-        // its share of the draws still needs few rounds.
-        let scale = (1.0 - f64::EPSILON) / sums.peak;
-        (scale, 0.0, mass * scale)
-    } else {
-        let scale = if mass > rf { rf / mass } else { 1.0 };
-        (scale, (rf - mass * scale).max(0.0), rf)
-    };
-    let floor = |j: usize| floor_index(mf * w[j]).0;
-    let mut lanes = (r > 0).then(|| LaneRng::from_rng(rng));
-    SCRATCH.with(|cell| {
+    let drawn = SCRATCH.with(|cell| {
         let DrawBuffers {
             counts,
             extra,
             removed,
             seen,
         } = &mut *cell.borrow_mut();
-        // No clearing: the first round sets every count.
-        counts.reset(n);
-        let mut t = 0;
-        match lanes.as_mut() {
-            None => counts.small.fill(0),
-            Some(lanes) => {
-                let mut rate = (round_mean(r) / keep_total).min(MAX_RATE);
-                let mut first_round = true;
-                while t < r {
-                    let round = if first_round {
-                        &mut *counts
-                    } else {
-                        &mut *extra
-                    };
-                    let rates = Rates::Residuals {
-                        a: mf,
-                        b: scale * rate,
-                    };
-                    t += poisson_counts(simd, round, w, rates, lanes, rng).0;
-                    if let Ok(more) = Poisson::new(rate * e) {
-                        let more = more.sample(rng) as usize;
-                        round.add_to(n - 1, more);
-                        t += more;
-                    }
-                    if !first_round {
-                        counts.add(extra);
-                    }
-                    first_round = false;
-                    rate = (round_mean(r.saturating_sub(t)) / keep_total).min(MAX_RATE);
+        let mut lanes = None;
+        // A whole call's first round, where a sample of the weights plans it, runs before
+        // the floors are known and finds them (and checks the weights) as it goes.
+        let planned = if block.is_none() {
+            first_rate(w, mf)
+        } else {
+            None
+        };
+        let mut first_round = None;
+        let (floors, mass) = match (block, planned) {
+            (Some(sums), _) => (sums.floors, sums.mass),
+            (None, Some(lam)) => {
+                let lanes = lanes.insert(LaneRng::from_rng(rng));
+                let rates = Rates::Residuals { a: mf, b: lam };
+                let tally = poisson_counts(simd, counts, w, rates, lanes, rng);
+                if !tally.clean {
+                    return false;
                 }
+                first_round = Some((tally.total, lam));
+                (tally.floors as usize, tally.rates / lam)
+            }
+            (None, None) => match floors_and_mass(simd, w, mf) {
+                (sums, true) => (sums.floors, sums.mass),
+                (_, false) => return false,
+            },
+        };
+        let r = m.saturating_sub(floors);
+        // The draws are from `r_j/R`. Weights summing short of 1 leave `Σ r_j < R`; the
+        // missing mass goes to the last particle (where the cumulative-weight schemes put
+        // it), as an extra rate `e`. Weights summing past 1 give the draws of `r_j/Σ r_j`.
+        // Each round's candidate rate is set so that its counts have the mean it needs in
+        // all (`Σ keep + e`).
+        let rf = r as f64;
+        let (scale, e, keep_total) = if let Some(sums) = block.filter(|_| mass > 0.0) {
+            // Counts in proportion to `r_j` whatever their sum: keep probabilities
+            // `r_j/max r_j` (rounded down, so at most 1), and the candidates' rate carries
+            // the normalisation. With the largest keep probability 1, a round keeps at
+            // least as many candidates as one particle has, so a block whose residual mass
+            // is far below its share of the draws still needs few rounds.
+            let scale = (1.0 - f64::EPSILON) / sums.peak;
+            (scale, 0.0, mass * scale)
+        } else {
+            let scale = if mass > rf { rf / mass } else { 1.0 };
+            (scale, (rf - mass * scale).max(0.0), rf)
+        };
+        let mut t = 0;
+        // The missing mass's draws of a round at `rate` (its counts at `scale·rate·r_j`).
+        let missing = |round: &mut Counts, rate: f64, rng: &mut R| {
+            let more = Poisson::new(rate * e).map_or(0, |d| d.sample(rng) as usize);
+            round.add_to(n - 1, more);
+            more
+        };
+        match first_round {
+            // Counts at `Λ·r_j` are those of a round at `Λ/scale`.
+            Some((total, lam)) => t = total.saturating_add(missing(counts, lam / scale, rng)),
+            None if r > 0 => lanes = Some(LaneRng::from_rng(rng)),
+            None => {
+                counts.reset(n);
+                counts.small.fill(0);
+            }
+        }
+        if let Some(lanes) = lanes.as_mut() {
+            // Whether the next round's counts are the first (else they join the others).
+            let mut fresh = first_round.is_none();
+            while t < r {
+                let rate = (round_mean(r.saturating_sub(t) as f64) / keep_total).min(MAX_RATE);
+                let round = if fresh { &mut *counts } else { &mut *extra };
+                let rates = Rates::Residuals {
+                    a: mf,
+                    b: scale * rate,
+                };
+                t += poisson_counts(simd, round, w, rates, lanes, rng).total;
+                t += missing(round, rate, rng);
+                if !fresh {
+                    counts.add(extra);
+                }
+                fresh = false;
             }
         }
         distinct_sorted(t, t - r, rng, seen, removed);
         // Eight copies a store, as for multinomial: with four, the particles whose floor and
         // draws pass four (5 % on the bench's weights) took the run loop's slow branch, and
         // the scheme ran 3.78 against 3.60 ns at N = 10⁶ (performance log, 2026-11-27).
+        let floor = |j: usize| floor_index(mf * w[j]).0;
         write_runs::<8>(simd, counts, removed, &Floors(floor), first, out);
+        true
     });
+    if !drawn {
+        // Outside the contract (a NaN, negative or above-1 weight, where the floors would
+        // mean nothing): such weights count as 0, or 1 above it, on a cleaned copy (an
+        // allocation on this path only).
+        let clean: Vec<f64> = w.iter().map(|&x| clean(x)).collect();
+        residual_draws(simd, &clean, mf, None, first, rng, out);
+    }
+}
+
+/// Blocks of [`SCAN`] weights that plan a whole call's first round ([`first_rate`]).
+const PLAN_BLOCKS: usize = 32;
+
+/// The rate `Λ` of a whole call's first round, from a sample of [`PLAN_BLOCKS`] blocks
+/// spread evenly over the weights (all of them when there are fewer), or `None` when the
+/// sample leaves the residual mass `R` too uncertain or too small: then a pass of its own
+/// finds the floors first, as for a block of a split.
+///
+/// Any `Λ` gives the same law (the counts are conditioned on their total, and a short
+/// total is topped up), so the sample only has to make the round efficient: `Λ` is that of
+/// a round drawing the sample's lower bound on `R` (its estimate less [`OVERSHOOT`]
+/// standard errors of cluster sampling), which overshoots a larger `R` by more and falls
+/// short about as rarely as a round planned on the exact `R`. With the plan, the round's
+/// pass over the weights also sums the floors and checks the weights ([`Tally`]), and the
+/// floors pass goes: it took 0.28 of the scheme's 2.9 ns per particle at N = 10⁶.
+fn first_rate(w: &[f64], mf: f64) -> Option<f64> {
+    let blocks = w.len().div_ceil(SCAN);
+    let k = blocks.min(PLAN_BLOCKS);
+    let (mut sum, mut squares) = (0.0, 0.0);
+    for i in 0..k {
+        let b = i * blocks / k;
+        let sample = &w[b * SCAN..((b + 1) * SCAN).min(w.len())];
+        let s: f64 = sample
+            .iter()
+            .map(|&w| {
+                let x = mf * w;
+                x - floor_index(x).1
+            })
+            .sum();
+        sum += s;
+        squares += s * s;
+    }
+    let (k, blocks) = (k as f64, blocks as f64);
+    let mean = sum / k;
+    let spread = if k > 1.0 {
+        (squares - k * mean * mean).max(0.0) / (k - 1.0)
+    } else {
+        0.0
+    };
+    let estimate = blocks * mean;
+    let error = blocks * (spread * (1.0 - k / blocks) / k).sqrt();
+    let low = estimate - OVERSHOOT * error;
+    // A NaN (weights outside the contract) fails both tests.
+    (low >= 1.0 && low >= estimate / 2.0).then(|| (round_mean(low) / low).min(MAX_RATE))
 }
 
 #[cfg(test)]
@@ -426,6 +500,93 @@ mod tests {
             }
         }
         assert!(chi2 < 20.5, "χ² {chi2}");
+    }
+
+    /// The plan of a whole call's first round: exact where it samples every block, `Λ` of
+    /// a round drawing about `R` on weights like the bench's, and no plan where the sample
+    /// says little (weights outside the contract, too little residual mass).
+    #[test]
+    fn the_first_round_is_planned_from_a_sample() {
+        let lam = |r: f64| (round_mean(r) / r).min(MAX_RATE);
+        // 3 particles, M = 4: residuals (0.8, 0.4, 0.8), every block sampled.
+        assert_eq!(first_rate(&[0.45, 0.35, 0.2], 4.0), Some(lam(2.0)));
+        let mut rng = stream_rng(41, 0);
+        for n in [5000usize, 100_000] {
+            let raw: Vec<f64> = (0..n).map(|_| rng.random::<f64>().powi(4)).collect();
+            let total: f64 = raw.iter().sum();
+            let mut w: Vec<f64> = raw.iter().map(|x| x / total).collect();
+            let mf = n as f64;
+            let r: f64 = w.iter().map(|&w| mf * w - (mf * w).floor()).sum();
+            // The sample's lower bound lies below `R` and within a fifth of it.
+            let got = first_rate(&w, mf).expect("a plan");
+            assert!(
+                got >= lam(r) && got <= lam(0.8 * r),
+                "N = {n}: {got} for R = {r}"
+            );
+            w[n / 2] = f64::NAN;
+            assert_eq!(first_rate(&w, mf), None, "N = {n}");
+        }
+        // Residual mass 0.01 of a draw: no plan (the floors pass finds that there is none).
+        assert_eq!(first_rate(&[1e-6; 10], 1000.0), None);
+    }
+
+    /// Residual draws stay multinomial where the plan misjudges `R` or gives up. With
+    /// 320 blocks of 64 particles, the plan samples every tenth block. Residuals of 1/2
+    /// only in those blocks make it think `R` ten times larger, so that its round falls
+    /// short of `R` (by about 1 standard deviation: in about 1 call in 6) and a second
+    /// round tops it up; the same residuals only in the other blocks leave it no sample
+    /// of them, and the floors come first. Either way `R = 1024`, and the first block's
+    /// draws beyond its floors are Binomial(1024, 1/32) if it holds residuals, none if not
+    /// (chi-square over 1500 calls).
+    #[test]
+    fn draws_stay_multinomial_when_the_plan_misjudges() {
+        let (blocks, m) = (320usize, 320 * 64);
+        let mf = m as f64;
+        for sampled in [true, false] {
+            // `M·W_j`: 1.5 in the 32 blocks with residuals; elsewhere 1, and 0 for 1024
+            // particles, so that the total is `M`.
+            let mut zeros = 1024;
+            let mw: Vec<f64> = (0..blocks)
+                .flat_map(|b| {
+                    let holds = b % 10 == if sampled { 0 } else { 5 };
+                    (0..64).map(move |_| holds)
+                })
+                .map(|holds| match holds {
+                    true => 1.5,
+                    false if zeros > 0 => {
+                        zeros -= 1;
+                        0.0
+                    }
+                    false => 1.0,
+                })
+                .collect();
+            let w: Vec<f64> = mw.iter().map(|x| x / mf).collect();
+            assert_eq!(w.iter().filter(|&&x| x * mf == 1.5).count(), 2048);
+            assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+            let plan = first_rate(&w, mf);
+            match sampled {
+                // The plan's round draws `Λ·R` on average, within one standard deviation.
+                true => assert!(plan.expect("a plan") * 1024.0 < 1024.0 + 32.0, "{plan:?}"),
+                false => assert_eq!(plan, None),
+            }
+            let first = mw.iter().position(|&x| x == 1.5).expect("residuals");
+            let reps = 1500;
+            let mut hist = vec![0usize; 1025];
+            let mut rng = stream_rng(42, u64::from(sampled));
+            let mut a = vec![0usize; m];
+            for _ in 0..reps {
+                residual(Simd::Auto, &w, &mut rng, &mut a);
+                let counts = offspring_counts(&a, w.len());
+                let draws: usize = (first..first + 64).map(|j| counts[j] - 1).sum();
+                hist[draws] += 1;
+            }
+            let (chi2, df) = pearson_pooled(&hist, |k| binomial_pmf(1024, 1.0 / 32.0, k));
+            assert!(df >= 4, "{df} df");
+            assert!(
+                chi2 < chi2_quantile_999(df),
+                "sampled {sampled}: χ² {chi2} on {df} df"
+            );
+        }
     }
 
     /// 64 particles with residuals spread over [0, 1) (one vectorised block): particle 0's
