@@ -30,6 +30,7 @@ mod poisson;
 mod poisson_avx512;
 mod residual;
 mod stratified;
+mod stratified_avx512;
 mod systematic;
 
 pub use multinomial::Multinomial;

@@ -8,31 +8,27 @@
 //!
 //! ## Where the uniforms come from
 //!
-//! `U_f` matters only for the strata `f` that hold some particle's boundary, and those
-//! strata are fixed by the weights alone. So `U_f` is taken to be `V_j`, the `j`-th draw of
-//! a [`LaneRng`] stream (seeded from the caller's generator), for `j` the **first particle
-//! whose boundary falls in stratum `f`**; the later particles of the same stratum reuse it.
-//! Distinct strata get distinct `j`, so the `U_f` that matter are independent uniforms,
-//! independent of the weights, and the law is exactly stratified resampling (tested by
-//! chi-square over every outcome of a small case). The draws come one lane step per 64
-//! particles, sequentially, instead of from a counter-based hash of `f` (two 64-bit
-//! multiplies per particle, which AVX2 lacks): 3.7 against 4.1 ns per particle at
-//! N = 10⁶ (criterion, 2026-11-24). The ancestors are exactly those of the merge given
-//! the same `U_f` and the same cumulative weights (tested).
+//! `U_f` is the `f`-th output of a SplitMix64 stream keyed by one draw of the caller's
+//! generator ([`stratum_uniform`]): a function of the stratum alone, so every particle whose
+//! boundary falls in stratum `f` finds the same `U_f` with no look at its neighbours, and
+//! the batch filter's chunks, each walking its own ancestors, find it too. The law is
+//! exactly stratified resampling (tested by chi-square over every outcome of a small case),
+//! and the ancestors are exactly those of the merge given the same `U_f` and the same
+//! cumulative weights (tested).
 //!
-//! ## In the batch filter
-//!
-//! The batch filter's chunks each count their own ancestors, so any chunk may need any
-//! stratum's uniform, and the "first particle of the stratum" may lie in another chunk.
-//! There `U_f` is drawn by its index instead ([`stratum_uniform`], the `f`-th output of a
-//! SplitMix64 stream keyed per step), which costs the hash's two 64-bit multiplies per
-//! particle but lets the chunks run side by side (see [`stratified_index_in`]).
+//! The hash costs two 64-bit multiplies per particle, which AVX2 emulates in three 32-bit
+//! steps each; on a CPU with AVX-512 a twin ([`stratified_avx512`](super::stratified_avx512))
+//! makes them one instruction. Until 2026-11-28, the standalone scheme took `U_f` from a
+//! lane stream instead, the draw of the first particle of each stratum, passed down the
+//! block by a chain of selects: 2.95 ns per particle at N = 10⁶ against 2.22 with the
+//! hash on the twin, and 3.13 with the hash on AVX2 (best of interleaved rounds).
 
 use super::Resample;
-use super::offspring::{SCAN, walk_weights};
+use super::offspring::walk_weights;
 use crate::mc::{GAMMA, splitmix};
+use crate::simd::Simd;
+use crate::simd::avx512::Avx512;
 use crate::simd::math::{floor_index, index_in, unit_from_bits};
-use crate::simd::{LaneRng, Simd};
 use rand::Rng;
 
 /// Stratified resampling (Kitagawa 1996).
@@ -41,47 +37,24 @@ pub struct Stratified;
 
 impl Resample for Stratified {
     fn resample<R: Rng + ?Sized>(&self, w: &[f64], rng: &mut R, ancestors: &mut [usize]) {
-        let mut lanes = LaneRng::from_rng(rng);
-        stratified_from_lanes(Simd::Auto, w, &mut lanes, ancestors);
+        stratified_with_key(Simd::Auto, w, rng.next_u64(), ancestors);
     }
 }
 
-/// Stratified resampling with `V_j` the `j`-th draw of `lanes` (see the module's notes).
-fn stratified_from_lanes(simd: Simd, w: &[f64], lanes: &mut LaneRng, ancestors: &mut [usize]) {
-    let m = ancestors.len();
-    let mf = m as f64;
-    // The previous particle's stratum and the raw bits of its U.
-    let (mut prev_f, mut prev_v) = (usize::MAX, 0u64);
-    let (mut f, mut t) = ([0usize; SCAN], [0.0f64; SCAN]);
+/// Stratified resampling with the uniforms [`stratum_uniform`]`(key, ·)`.
+fn stratified_with_key(simd: Simd, w: &[f64], key: u64, ancestors: &mut [usize]) {
+    let mf = ancestors.len() as f64;
+    let cpu = Avx512::get(simd);
     walk_weights(
         simd,
         w,
         #[inline(always)]
         |c, k| {
-            // Local to the block: a buffer kept across blocks made the run writer compile
-            // worse (1.3 % more instructions, callgrind).
-            let mut v = [0u64; SCAN];
-            lanes.step(&mut v);
-            let (f, t) = (&mut f[..c.len()], &mut t[..c.len()]);
-            for ((f, t), &c) in f.iter_mut().zip(t.iter_mut()).zip(c) {
-                let x = mf * c;
-                let (fi, ff) = floor_index(x);
-                (*f, *t) = (fi, x - ff);
-            }
-            // A particle in its predecessor's stratum takes its predecessor's U. A select
-            // the CPU cannot predict: compiled as a branch, it doubled the time.
-            let (mut pf, mut pv) = (prev_f, prev_v);
-            for (v, &f) in v.iter_mut().zip(&*f) {
-                *v = std::hint::select_unpredictable(f == pf, pv, *v);
-                (pf, pv) = (f, *v);
-            }
-            (prev_f, prev_v) = (pf, pv);
-            for (((k, &f), &t), &v) in k.iter_mut().zip(&*f).zip(&*t).zip(&v) {
-                *k = if f >= m {
-                    m
-                } else {
-                    f + usize::from(unit_from_bits(v) < t)
-                };
+            let done = cpu.map_or(0, |cpu| {
+                super::stratified_avx512::boundaries(cpu, c, key, mf, k)
+            });
+            for (k, &c) in k[done..].iter_mut().zip(&c[done..]) {
+                *k = stratified_index_in(mf * c, key, 0.0, mf);
             }
         },
         ancestors,
@@ -122,25 +95,6 @@ mod tests {
     use crate::testing::chi2_quantile_999;
     use std::collections::HashMap;
 
-    /// The `U_f` a call draws: `V_j` of the stream, for `j` the first particle whose
-    /// boundary falls in stratum `f` (`None` for the strata no boundary falls in).
-    fn stratum_uniforms(c: &[f64], m: usize, lanes: &LaneRng) -> Vec<Option<f64>> {
-        let mut lanes = lanes.clone();
-        let v: Vec<u64> = (0..c.len().div_ceil(SCAN))
-            .flat_map(|_| {
-                let mut v = [0; SCAN];
-                lanes.step(&mut v);
-                v
-            })
-            .collect();
-        let mut u = vec![None; m + 1];
-        for (&cj, &vj) in c.iter().zip(&v) {
-            let f = ((m as f64 * cj).floor() as usize).min(m);
-            u[f].get_or_insert(unit_from_bits(vj));
-        }
-        u
-    }
-
     /// The strata's uniforms by index are uniform and uncorrelated from one stratum to the
     /// next: over 10⁵ strata, a chi-square over 64 equal bins and the lag-one correlation
     /// within five standard errors of 0, for two keys.
@@ -174,7 +128,8 @@ mod tests {
     }
 
     /// The ancestors are those of the textbook merge of the points `(i + U_i)/M` with the
-    /// same cumulative weights, given the `U_f` the call draws, on both kernels.
+    /// same cumulative weights and `U_i = stratum_uniform(key, i)`, on every kernel (the
+    /// AVX-512 twin's groups of eight and the rest after them).
     #[test]
     fn counting_equals_the_merge_with_the_same_uniforms() {
         for n in [141usize, 300] {
@@ -187,18 +142,17 @@ mod tests {
             };
             let c = cumulative(&w);
             for &m in &[1usize, 7, 41, 100, 141, 1000] {
-                for seed in 0..4 {
-                    let lanes = LaneRng::from_rng(&mut stream_rng(seed, m as u64));
-                    let u = stratum_uniforms(&c, m, &lanes);
+                for key in [0u64, 7, u64::MAX] {
                     // Stratum i's point lies below C_j when i < ⌊M·C_j⌋, or i = ⌊M·C_j⌋
-                    // and U_i < M·C_j − i; U_i is drawn whenever that comparison is made.
+                    // and U_i < M·C_j − i.
                     let mut j = 0;
                     let merge: Vec<usize> = (0..m)
                         .map(|i| {
                             let below = |j: usize| {
                                 let x = m as f64 * c[j];
                                 let f = x.floor();
-                                (i as f64) < f || ((i as f64) == f && u[i].expect("drawn") < x - f)
+                                (i as f64) < f
+                                    || ((i as f64) == f && stratum_uniform(key, i as u64) < x - f)
                             };
                             while j + 1 < n && !below(j) {
                                 j += 1;
@@ -206,12 +160,50 @@ mod tests {
                             j
                         })
                         .collect();
-                    for simd in [Simd::Auto, Simd::Portable] {
+                    for simd in [Simd::Auto, Simd::Avx2, Simd::Portable] {
                         let mut fast = vec![0; m];
-                        stratified_from_lanes(simd, &w, &mut lanes.clone(), &mut fast);
-                        assert_eq!(fast, merge, "N = {n}, M = {m}, seed {seed}, {simd:?}");
+                        stratified_with_key(simd, &w, key, &mut fast);
+                        assert_eq!(fast, merge, "N = {n}, M = {m}, key {key}, {simd:?}");
                     }
                 }
+            }
+        }
+    }
+
+    /// The AVX-512 twin's boundaries are the portable function's, bit for bit, on
+    /// cumulative weights inside [0, 1] and far outside it: negative, NaN, infinite, and
+    /// beyond `2⁵¹/M`, where the boundaries are garbage but the same garbage.
+    #[test]
+    fn the_twin_gives_the_portable_boundaries() {
+        let Some(cpu) = Avx512::get(Simd::Auto) else {
+            return;
+        };
+        let mut rng = crate::mc::stream_rng(43, 0);
+        let specials = [
+            -0.0,
+            -1.0,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            1e300,
+            3e15,
+        ];
+        for (case, mf) in [1.0, 7.0, 1000.0, 1e6].into_iter().enumerate() {
+            let c: Vec<f64> = (0..203)
+                .map(|j| match j % 9 {
+                    0 => specials[(j / 9) % specials.len()],
+                    1 => (j as f64 / mf).next_down(),
+                    2 => j as f64 / mf,
+                    _ => rand::RngExt::random::<f64>(&mut rng),
+                })
+                .collect();
+            let key = case as u64 * 0x1234_5678_9abc_def1;
+            let mut got = vec![usize::MAX; c.len()];
+            let done = super::super::stratified_avx512::boundaries(cpu, &c, key, mf, &mut got);
+            assert_eq!(done, 200);
+            for (j, (&g, &c)) in got[..done].iter().zip(&c).enumerate() {
+                let want = stratified_index_in(mf * c, key, 0.0, mf);
+                assert_eq!(g, want, "M = {mf}, particle {j}, C = {c}");
             }
         }
     }
