@@ -219,6 +219,7 @@ mod x86 {
             // counts come later), a block at a time: with the floors kept in registers
             // through the inversion, the rates' sums went to the stack, a chain through
             // memory.
+            // (Dead in the multinomial copy, where `rb` is never stored.)
             let rb = _mm512_mask_mov_epi8(_mm512_adds_epu8(fb, cb), escaped, _mm512_set1_epi8(-1));
             if RESIDUALS {
                 if _mm512_cmpeq_epi8_mask(fb, _mm512_set1_epi8(-1)) == 0 {
@@ -408,9 +409,8 @@ mod x86 {
 
     /// The single-precision inversion continued from term `from` for the lanes in `more`
     /// (at or below `hi` at the last sum `s`, `pw` the last power), until none is (the
-    /// first [`BATCH`] terms untested); returns
-    /// the lanes it cannot settle: those whose sum stops moving in `f32`, or still going at
-    /// [`LAST_TERM`].
+    /// first [`BATCH`] terms untested); returns the lanes it cannot settle: those whose
+    /// sum stops moving in `f32`, or still going at [`LAST_TERM`].
     #[inline]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     #[allow(clippy::too_many_arguments)]
