@@ -215,16 +215,17 @@ pub(crate) mod x86 {
     #[inline]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     fn step_regs(w: &mut [__m512i; 4]) -> __m512i {
-        let [mut s0, mut s1, mut s2, mut s3] = *w;
+        let [s0, s1, s2, s3] = *w;
         let out = _mm512_add_epi64(_mm512_rol_epi64::<23>(_mm512_add_epi64(s0, s3)), s0);
         let t = _mm512_slli_epi64::<17>(s1);
-        s2 = _mm512_xor_si512(s2, s0);
-        s3 = _mm512_xor_si512(s3, s1);
-        s1 = _mm512_xor_si512(s1, s2);
-        s0 = _mm512_xor_si512(s0, s3);
-        s2 = _mm512_xor_si512(s2, t);
-        s3 = _mm512_rol_epi64::<45>(s3);
-        *w = [s0, s1, s2, s3];
+        // The step's xors, three words to a `vpternlogq` (`0x96`: `a ^ b ^ c`).
+        let s3x = _mm512_xor_si512(s3, s1);
+        *w = [
+            _mm512_ternarylogic_epi64::<0x96>(s0, s3, s1),
+            _mm512_ternarylogic_epi64::<0x96>(s1, s2, s0),
+            _mm512_ternarylogic_epi64::<0x96>(s2, s0, t),
+            _mm512_rol_epi64::<45>(s3x),
+        ];
         out
     }
 
