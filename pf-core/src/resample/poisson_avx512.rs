@@ -135,7 +135,9 @@ mod x86 {
     const LN2_16_HI: f32 = (std::f64::consts::LN_2 / 16.0) as f32;
     const LN2_16_LO: f32 = (std::f64::consts::LN_2 / 16.0 - LN2_16_HI as f64) as f32;
 
-    /// `2⁻²⁴`: the spacing of the single-precision uniforms.
+    /// `2⁻²⁴`: the spacing of the single-precision uniforms (folded into
+    /// [`EXP_SCALE`] in the kernel).
+    #[cfg(test)]
     const ULP_U: f32 = 1.0 / 16_777_216.0;
 
     /// The kernel for [`Rates::Scaled`]`(a)`, or with `RESIDUALS` for
