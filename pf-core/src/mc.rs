@@ -16,10 +16,13 @@ pub type PfRng = Xoshiro256PlusPlus;
 /// SplitMix64's output function (Steele, Lea & Flood 2014): a bijective 64-bit mixer.
 #[inline(always)]
 pub(crate) fn splitmix(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z = (z ^ (z >> 30)).wrapping_mul(SPLITMIX_MULTIPLIERS[0]);
+    z = (z ^ (z >> 27)).wrapping_mul(SPLITMIX_MULTIPLIERS[1]);
     z ^ (z >> 31)
 }
+
+/// The two multipliers of [`splitmix`], in order (its vector twins use them too).
+pub(crate) const SPLITMIX_MULTIPLIERS: [u64; 2] = [0xbf58_476d_1ce4_e5b9, 0x94d0_49bb_1331_11eb];
 
 /// SplitMix64's increment, the odd integer closest to `2⁶⁴/φ`.
 pub(crate) const GAMMA: u64 = 0x9e37_79b9_7f4a_7c15;

@@ -15,13 +15,10 @@ pub(crate) fn boundaries(cpu: Avx512, c: &[f64], key: u64, mf: f64, k: &mut [usi
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use crate::mc::GAMMA;
+    use crate::mc::{GAMMA, SPLITMIX_MULTIPLIERS};
     use crate::simd::avx512::x86::load_pd;
     use crate::simd::math::ROUND_MAGIC;
     use std::arch::x86_64::*;
-
-    /// SplitMix64's multipliers (see `mc::splitmix`).
-    const MIX: [u64; 2] = [0xbf58_476d_1ce4_e5b9, 0x94d0_49bb_1331_11eb];
 
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     pub(super) fn boundaries(c: &[f64], key: u64, mf: f64, k: &mut [usize]) -> usize {
@@ -29,7 +26,7 @@ mod x86 {
         let magic_bits = _mm512_set1_epi64(ROUND_MAGIC.to_bits() as i64);
         let (zero, one, m) = (_mm512_setzero_pd(), _mm512_set1_pd(1.0), _mm512_set1_pd(mf));
         let ones = _mm512_set1_epi64(1);
-        let mix = MIX.map(|c| _mm512_set1_epi64(c as i64));
+        let mix = SPLITMIX_MULTIPLIERS.map(|c| _mm512_set1_epi64(c as i64));
         let mut groups = c.chunks_exact(8).zip(k.chunks_exact_mut(8));
         for (c, k) in &mut groups {
             let x = _mm512_mul_pd(m, load_pd(c));
