@@ -8,7 +8,7 @@
 /// the caches, bytes are one eighth of the memory traffic of `usize` counts: multinomial
 /// resampling's counts and runs took 2.8 against 3.1 ns per particle (scratch harness,
 /// 2026-11-27).
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone)]
 pub(crate) struct Counts {
     /// Each particle's count, or [`Counts::BIG`].
     pub(crate) small: Vec<u8>,

@@ -1044,11 +1044,7 @@ mod tests {
                     packed.set(j, c);
                 }
                 // The runs before removals, as the counting passes leave them.
-                let mut with_runs = Counts::new();
-                with_runs.reset(n);
-                for (j, &c) in counts.iter().enumerate() {
-                    with_runs.set(j, c);
-                }
+                let mut with_runs = packed.clone();
                 with_runs.runs = (0..n)
                     .map(|j| (base(j) + counts[j]).min(255) as u8)
                     .collect();
