@@ -27,6 +27,11 @@ mod x86 {
         let (zero, one, m) = (_mm512_setzero_pd(), _mm512_set1_pd(1.0), _mm512_set1_pd(mf));
         let ones = _mm512_set1_epi64(1);
         let mix = SPLITMIX_MULTIPLIERS.map(|c| _mm512_set1_epi64(c as i64));
+        let (gamma, key) = (
+            _mm512_set1_epi64(GAMMA as i64),
+            _mm512_set1_epi64(key as i64),
+        );
+        let exponent = _mm512_set1_epi64(0x3ff0_0000_0000_0000);
         let mut groups = c.chunks_exact(8).zip(k.chunks_exact_mut(8));
         for (c, k) in &mut groups {
             let x = _mm512_mul_pd(m, load_pd(c));
@@ -40,12 +45,11 @@ mod x86 {
             let ff = _mm512_mask_sub_pd(r, above, r, one);
             // `stratum_uniform(key, f)`: SplitMix64 at `key + (f + 1)·γ`, its top 52 bits
             // as a uniform on [0, 1).
-            let z = _mm512_mullo_epi64(_mm512_add_epi64(f, ones), _mm512_set1_epi64(GAMMA as i64));
-            let z = _mm512_add_epi64(z, _mm512_set1_epi64(key as i64));
+            let z = _mm512_mullo_epi64(_mm512_add_epi64(f, ones), gamma);
+            let z = _mm512_add_epi64(z, key);
             let z = _mm512_mullo_epi64(_mm512_xor_si512(z, _mm512_srli_epi64::<30>(z)), mix[0]);
             let z = _mm512_mullo_epi64(_mm512_xor_si512(z, _mm512_srli_epi64::<27>(z)), mix[1]);
             let z = _mm512_xor_si512(z, _mm512_srli_epi64::<31>(z));
-            let exponent = _mm512_set1_epi64(0x3ff0_0000_0000_0000);
             let u = _mm512_or_si512(_mm512_srli_epi64::<12>(z), exponent);
             let u = _mm512_sub_pd(_mm512_castsi512_pd(u), one);
             // `f + [U_f < x − f]`, clamped to [0, M] (a NaN passes both), as an index.
