@@ -37,7 +37,7 @@
 //! unbiasedness of the likelihood estimate against the Kalman filter's exact value).
 
 use super::{ResamplePolicy, RunSummary, StepReport};
-use crate::buffer::ParticleBuf;
+use crate::buffer::{Line, ParticleBuf};
 use crate::error::{CoreError, Result};
 use crate::limits::{PARTICLE_BUFFERS, check_count, check_memory};
 use crate::mc::{Par, PfRng, stream_rng};
@@ -161,11 +161,12 @@ impl Default for ChunkStat {
 /// One worker's scratch, reused for every chunk it processes (it stays in L1/L2).
 #[derive(Debug, Clone)]
 struct Scratch {
-    /// Standard normals.
-    z: Vec<f64>,
+    /// Standard normals, as `f64`s on cache lines ([`Line`]: the normals' and `exp`'s
+    /// twins load and store eight at a time).
+    z: Vec<Line>,
     /// Ancestors' states, then log-weights, then weights relative to the chunk maximum
-    /// (`PAD` longer than a chunk).
-    l: Vec<f64>,
+    /// (`PAD` longer than a chunk), on cache lines as `z`.
+    l: Vec<Line>,
     /// Where this worker's walk stopped in this step (see [`WalkHint`]).
     hint: WalkHint,
 }
@@ -173,8 +174,8 @@ struct Scratch {
 impl Scratch {
     fn new(c: usize) -> Self {
         Scratch {
-            z: vec![0.0; c],
-            l: vec![0.0; c + PAD],
+            z: Line::zeroed_for_f64s(c),
+            l: Line::zeroed_for_f64s(c + PAD),
             hint: WalkHint::NONE,
         }
     }
@@ -657,7 +658,7 @@ fn chunk_step<M: ScalarModel>(
     let len = xs.len();
     let lo = d * ctx.c;
     let (model, t) = (ctx.model, ctx.t);
-    let z = &mut s.z[..len];
+    let z = &mut Line::f64s(&mut s.z)[..len];
     match ctx.avx512 {
         Some(cpu) => cpu.fill_normal(rng, z),
         None => rng.fill_normal_inline(z),
@@ -682,13 +683,27 @@ fn chunk_step<M: ScalarModel>(
         Source::Systematic(u) => {
             let k = |x: f64, a, b| ceil_index_in(x - u, a, b);
             let twin = ctx.avx512.map(|cpu| (cpu, u));
-            gather_counted(ctx, (k, twin), lo, len, &mut s.l[..len + PAD], &mut s.hint);
-            weighed = counted_propagate(ctx, z, xs, &mut s.l[..len]);
+            gather_counted(
+                ctx,
+                (k, twin),
+                lo,
+                len,
+                &mut Line::f64s(&mut s.l)[..len + PAD],
+                &mut s.hint,
+            );
+            weighed = counted_propagate(ctx, z, xs, &mut Line::f64s(&mut s.l)[..len]);
         }
         Source::Stratified(key) => {
             let k = |x, a, b| stratified_index_in(x, key, a, b);
-            gather_counted(ctx, (k, None), lo, len, &mut s.l[..len + PAD], &mut s.hint);
-            weighed = counted_propagate(ctx, z, xs, &mut s.l[..len]);
+            gather_counted(
+                ctx,
+                (k, None),
+                lo,
+                len,
+                &mut Line::f64s(&mut s.l)[..len + PAD],
+                &mut s.hint,
+            );
+            weighed = counted_propagate(ctx, z, xs, &mut Line::f64s(&mut s.l)[..len]);
         }
         Source::Given => {
             gather_propagate(model, t, ctx.x_old, &ctx.ancestors[lo..lo + len], z, xs);
@@ -697,7 +712,7 @@ fn chunk_step<M: ScalarModel>(
     // The prior log-weight (uniform after resampling, the previous one otherwise) plus the
     // log-likelihood, in one pass (a fill and then a second pass cost 0.5 instructions per
     // particle-step, callgrind).
-    let l = &mut s.l[..len];
+    let l = &mut Line::f64s(&mut s.l)[..len];
     let lw_old = &ctx.lw_old[lo..lo + len];
     match (ctx.source, ctx.y) {
         (Source::Identity, None) => l.copy_from_slice(lw_old),
