@@ -92,8 +92,9 @@ impl<T: Pod> ParticleBuf<T> {
                 of: PhantomData,
             });
         }
+        // `try_filled` checks the lines against the machine's memory; its error names the
+        // values asked for, not the lines.
         let what = crate::limits::PARTICLE_BUFFERS;
-        crate::limits::check_memory(what, n, bytes)?;
         let lines = crate::limits::try_filled(what, Line::count::<T>(n), Line::zeroed())
             .map_err(|_| crate::CoreError::TooLarge { what, len: n })?;
         Ok(ParticleBuf {

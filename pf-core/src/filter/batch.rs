@@ -659,6 +659,7 @@ fn chunk_step<M: ScalarModel>(
     let lo = d * ctx.c;
     let (model, t) = (ctx.model, ctx.t);
     let z = &mut Line::f64s(&mut s.z)[..len];
+    let scratch = Line::f64s(&mut s.l);
     match ctx.avx512 {
         Some(cpu) => cpu.fill_normal(rng, z),
         None => rng.fill_normal_inline(z),
@@ -683,27 +684,11 @@ fn chunk_step<M: ScalarModel>(
         Source::Systematic(u) => {
             let k = |x: f64, a, b| ceil_index_in(x - u, a, b);
             let twin = ctx.avx512.map(|cpu| (cpu, u));
-            gather_counted(
-                ctx,
-                (k, twin),
-                lo,
-                len,
-                &mut Line::f64s(&mut s.l)[..len + PAD],
-                &mut s.hint,
-            );
-            weighed = counted_propagate(ctx, z, xs, &mut Line::f64s(&mut s.l)[..len]);
+            weighed = walk_propagate(ctx, (k, twin), lo, z, xs, scratch, &mut s.hint);
         }
         Source::Stratified(key) => {
             let k = |x, a, b| stratified_index_in(x, key, a, b);
-            gather_counted(
-                ctx,
-                (k, None),
-                lo,
-                len,
-                &mut Line::f64s(&mut s.l)[..len + PAD],
-                &mut s.hint,
-            );
-            weighed = counted_propagate(ctx, z, xs, &mut Line::f64s(&mut s.l)[..len]);
+            weighed = walk_propagate(ctx, (k, None), lo, z, xs, scratch, &mut s.hint);
         }
         Source::Given => {
             gather_propagate(model, t, ctx.x_old, &ctx.ancestors[lo..lo + len], z, xs);
@@ -712,7 +697,7 @@ fn chunk_step<M: ScalarModel>(
     // The prior log-weight (uniform after resampling, the previous one otherwise) plus the
     // log-likelihood, in one pass (a fill and then a second pass cost 0.5 instructions per
     // particle-step, callgrind).
-    let l = &mut Line::f64s(&mut s.l)[..len];
+    let l = &mut scratch[..len];
     let lw_old = &ctx.lw_old[lo..lo + len];
     match (ctx.source, ctx.y) {
         (Source::Identity, None) => l.copy_from_slice(lw_old),
@@ -823,6 +808,23 @@ fn exp_block(b: &mut [f64], shift: f64) {
         *l -= shift;
     }
     exp_fma_nonpositive_lanes(b);
+}
+
+/// The ancestors' states of the outputs `lo ..` into `l` by [`gather_counted`] (its `k`
+/// and `twin`), then [`counted_propagate`] over them: whether it weighed.
+#[inline(always)]
+fn walk_propagate<M: ScalarModel, K: Fn(f64, f64, f64) -> usize>(
+    ctx: &StepCtx<'_, M>,
+    k_twin: (K, Option<(Avx512, f64)>),
+    lo: usize,
+    z: &[f64],
+    xs: &mut [f64],
+    l: &mut [f64],
+    hint: &mut WalkHint,
+) -> bool {
+    let len = xs.len();
+    gather_counted(ctx, k_twin, lo, len, &mut l[..len + PAD], hint);
+    counted_propagate(ctx, z, xs, &mut l[..len])
 }
 
 /// `x_i = f(l_i, z_i)` from the ancestors' states `l` (gathered by [`gather_counted`]),
