@@ -29,13 +29,31 @@ def write_y(path, ys):
             w.writerow([repr(y)])
 
 
-def report(name, n_particles, steps, seconds, loglik):
+def best_of(repeat, run):
+    """`run()` -> (seconds, loglik), `repeat` times from the same seed: every run gives the
+    same estimate, and the fastest is the least disturbed by other work on the machine (as
+    `pf-viz bench bootstrap --repeat`). Returns the times and the estimate."""
+    times, loglik = [], None
+    for _ in range(max(1, repeat)):
+        seconds, loglik = run()
+        times.append(seconds)
+    return times, loglik
+
+
+def report(name, n_particles, steps, times, loglik):
+    """One JSON line with the keys of `pf-viz bench bootstrap --json`: `seconds` is the
+    fastest of the runs, `seconds_median` their median."""
+    times = sorted(times)
+    k = len(times)
+    median = times[k // 2] if k % 2 else 0.5 * (times[k // 2 - 1] + times[k // 2])
     print(json.dumps({
         "library": name,
         "particles": n_particles,
         "steps": steps,
         "threads": 1,
-        "seconds": seconds,
-        "ns_per_particle_step": seconds * 1e9 / (n_particles * steps),
+        "seconds": times[0],
+        "ns_per_particle_step": times[0] * 1e9 / (n_particles * steps),
         "loglik": loglik,
+        "repeat": k,
+        "seconds_median": median,
     }))

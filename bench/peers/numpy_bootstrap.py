@@ -2,14 +2,14 @@
 `pf-viz bench bootstrap`: diffuse prior N(Y_0, rho^2), systematic resampling at every step,
 log-likelihood of Y_1..Y_n given Y_0.
 
-usage: numpy_bootstrap.py DATA.csv N [SEED]
+usage: numpy_bootstrap.py DATA.csv N [SEED] [REPEAT]
 """
 import sys
 import time
 
 import numpy as np
 
-from common import PHI, SIGMA, RHO, read_y, report
+from common import PHI, SIGMA, RHO, best_of, read_y, report
 
 
 def bootstrap(ys, n, rng):
@@ -35,10 +35,17 @@ def bootstrap(ys, n, rng):
 def main():
     ys = np.array(read_y(sys.argv[1]))
     n = int(sys.argv[2])
-    rng = np.random.default_rng(int(sys.argv[3]) if len(sys.argv) > 3 else 1)
-    t0 = time.perf_counter()
-    ll = bootstrap(ys, n, rng)
-    report("numpy", n, len(ys) - 1, time.perf_counter() - t0, ll)
+    seed = int(sys.argv[3]) if len(sys.argv) > 3 else 1
+    repeat = int(sys.argv[4]) if len(sys.argv) > 4 else 1
+
+    def run():
+        rng = np.random.default_rng(seed)
+        t0 = time.perf_counter()
+        ll = bootstrap(ys, n, rng)
+        return time.perf_counter() - t0, ll
+
+    times, ll = best_of(repeat, run)
+    report("numpy", n, len(ys) - 1, times, ll)
 
 
 if __name__ == "__main__":
