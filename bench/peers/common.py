@@ -1,6 +1,7 @@
 """Shared by the peer benchmarks: the AR(1)+noise data set and the JSON report."""
 import csv
 import json
+import statistics
 
 PHI, SIGMA, RHO = 0.98, 0.2, 1.0
 
@@ -30,9 +31,10 @@ def write_y(path, ys):
 
 
 def best_of(repeat, run):
-    """`run()` -> (seconds, loglik), `repeat` times from the same seed: every run gives the
-    same estimate, and the fastest is the least disturbed by other work on the machine (as
-    `pf-viz bench bootstrap --repeat`). Returns the times and the estimate."""
+    """`run()` -> (seconds, loglik), called `repeat` times; each call seeds its own generator
+    the same way, so every run gives the same estimate, and the fastest is the least
+    disturbed by other work on the machine (as `pf-viz bench bootstrap --repeat`). Returns
+    the times and the estimate."""
     times, loglik = [], None
     for _ in range(max(1, repeat)):
         seconds, loglik = run()
@@ -42,18 +44,17 @@ def best_of(repeat, run):
 
 def report(name, n_particles, steps, times, loglik):
     """One JSON line with the keys of `pf-viz bench bootstrap --json`: `seconds` is the
-    fastest of the runs, `seconds_median` their median."""
-    times = sorted(times)
-    k = len(times)
-    median = times[k // 2] if k % 2 else 0.5 * (times[k // 2 - 1] + times[k // 2])
+    fastest of the runs, `seconds_median` their median (the higher middle one for an even
+    count, as `pf-viz` takes it)."""
+    fastest = min(times)
     print(json.dumps({
         "library": name,
         "particles": n_particles,
         "steps": steps,
         "threads": 1,
-        "seconds": times[0],
-        "ns_per_particle_step": times[0] * 1e9 / (n_particles * steps),
+        "seconds": fastest,
+        "ns_per_particle_step": fastest * 1e9 / (n_particles * steps),
         "loglik": loglik,
-        "repeat": k,
-        "seconds_median": median,
+        "repeat": len(times),
+        "seconds_median": statistics.median_high(times),
     }))
