@@ -155,6 +155,7 @@ pub(crate) mod x86 {
         exp_fma_nonpositive,
     };
     use super::super::tables::{LAYERS, NORMAL};
+    use crate::buffer::Line;
     use std::arch::x86_64::*;
 
     /// Eight doubles from a slice of exactly eight.
@@ -169,13 +170,6 @@ pub(crate) mod x86 {
     #[inline]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     pub(crate) fn lanes_pd(v: __m512d) -> [f64; 8] {
-        bytemuck::cast(v)
-    }
-
-    /// The eight lanes of `v`.
-    #[inline]
-    #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
-    pub(crate) fn lanes_epi64(v: __m512i) -> [u64; 8] {
         bytemuck::cast(v)
     }
 
@@ -325,8 +319,13 @@ pub(crate) mod x86 {
                 // The indices go through memory, one store and eight loads: without
                 // `black_box`, LLVM moved each out of the register by `vmovd`/`vpextrd`
                 // (eight vector-to-integer transfers per step), and the normals took 0.90
-                // against 0.80 ns (performance log, 2026-11-27).
-                let bits = std::hint::black_box(lanes_epi64(b));
+                // against 0.80 ns (performance log, 2026-11-27). The store fills one
+                // cache line: on the stack's 16-byte alignment, a store 16 bytes past a
+                // 32-byte boundary was not forwarded to the loads on Zen 5, and the filter
+                // took 3.05 against 1.78 ns at N = 10⁴ in half of all processes
+                // (performance log, 2026-11-28, fourteenth session).
+                let bits: Line = std::hint::black_box(bytemuck::cast(b));
+                let bits: &[u64; 8] = bytemuck::cast_ref(&bits);
                 let edges = |l: usize| -> __m128d {
                     let i = bits[l] as usize & (LAYERS - 1);
                     let p: [f64; 2] = x[i..i + 2].try_into().expect("two edges");
@@ -449,7 +448,7 @@ pub(crate) mod x86 {
             for _ in 0..3 {
                 for g in 0..LANES / 8 {
                     let v = step8(a.state(), g);
-                    out.extend(lanes_epi64(v));
+                    out.extend(bytemuck::cast::<_, [u64; 8]>(v));
                     out.extend(lanes_pd(unit8(v)).map(f64::to_bits));
                 }
             }
