@@ -57,8 +57,9 @@ use rayon::prelude::*;
 /// fast path can feed it pre-drawn or chunk-local draws.
 ///
 /// Implement the three methods as `#[inline]` arithmetic (no branches, no allocation) and
-/// the filter's loops over them vectorise.
-pub trait ScalarModel: Sync {
+/// the filter's loops over them vectorise. `Send` and `Sync`, since a run's steps may go to
+/// another thread of the pool (see [`BatchBootstrap::run`]).
+pub trait ScalarModel: Send + Sync {
     /// `X_0` from a standard normal `z`.
     fn initial_from_normal(&self, z: f64) -> f64;
     /// `X_t` from `x_prev` and a standard normal `z`.
@@ -417,6 +418,11 @@ impl<M: ScalarModel> BatchBootstrap<M> {
 
     /// One step; `y = None` is a missing observation.
     ///
+    /// With [`Par::Rayon`], a loop of steps called from outside a rayon pool sends each
+    /// step's parallel pass to the pool and waits for it; run such a loop inside the pool
+    /// (`rayon::scope` or `ThreadPool::install`), as [`run`](Self::run) does: at N = 10⁴
+    /// that takes two threads from 2.2 to 1.2 ns per particle-step.
+    ///
     /// # Errors
     /// All weights zero or a NaN weight at this step. The filter then stays at step
     /// `k − 1`, as the generic one does (a step writes into the second set of buffers and
@@ -632,14 +638,23 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             });
         }
         self.reset();
-        let mut reports = Vec::with_capacity(ys.len());
-        for &y in ys {
-            reports.push(self.step(y)?);
+        let steps = |f: &mut Self| -> Result<RunSummary> {
+            let mut reports = Vec::with_capacity(ys.len());
+            for &y in ys {
+                reports.push(f.step(y)?);
+            }
+            Ok(RunSummary {
+                log_lik: f.log_likelihood(),
+                reports,
+            })
+        };
+        match self.cfg.par {
+            // Called from outside the pool, every step's parallel pass would be sent to the
+            // pool while this thread sleeps, three threads taking turns on two cores: the
+            // whole run goes to a worker instead (see `step`).
+            Par::Rayon if rayon::current_thread_index().is_none() => rayon::scope(|_| steps(self)),
+            _ => steps(self),
         }
-        Ok(RunSummary {
-            log_lik: self.log_likelihood(),
-            reports,
-        })
     }
 }
 
@@ -1094,6 +1109,37 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// `run` called from outside any pool (it then moves its steps to a worker of the
+    /// global pool) gives the bits of the sequential run and of steps taken one by one.
+    #[test]
+    fn a_run_from_outside_the_pool_is_the_sequential_run() {
+        assert!(
+            rayon::current_thread_index().is_none(),
+            "a test thread is outside"
+        );
+        let (m, ys) = setup();
+        let cfg = |par| BatchConfig {
+            chunk: 64,
+            par,
+            ..BatchConfig::new(1000, 7)
+        };
+        let bits = |f: &BatchBootstrap<NoisyAr1>, ll: f64| {
+            let x: Vec<u64> = f.particles().iter().map(|v| v.to_bits()).collect();
+            (ll.to_bits(), x)
+        };
+        let mut seq = BatchBootstrap::new(m, cfg(Par::Seq)).unwrap();
+        let ll = seq.run(&ys).unwrap().log_lik;
+        let want = bits(&seq, ll);
+        let mut par = BatchBootstrap::new(m, cfg(Par::Rayon)).unwrap();
+        let ll = par.run(&ys).unwrap().log_lik;
+        assert_eq!(bits(&par, ll), want);
+        let mut stepped = BatchBootstrap::new(m, cfg(Par::Rayon)).unwrap();
+        for &y in &ys {
+            stepped.step(y).unwrap();
+        }
+        assert_eq!(bits(&stepped, stepped.log_likelihood()), want);
     }
 
     /// The chunk-local resamplers (bisection, boundaries, four-wide copies) draw exactly
