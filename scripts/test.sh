@@ -4,11 +4,11 @@
 # official Rerun tools of the same version as the rerun crate.
 #
 # The Rerun tools are the PyPI package `rerun-sdk`, installed once into a virtual environment
-# under ~/.cache/pf-tools (override with PF_TOOLS). cargo's target directory defaults to
-# ~/.cache/pf-target, outside the clone, so later runs reuse the compiled dependencies.
+# under ~/.cache/pf-tools (override with PF_TOOLS). cargo's target directory is cargo's own
+# (`target/`, or CARGO_TARGET_DIR), the same one the README's report command builds into, so
+# the tests compile only the workspace's test code on top of that build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$HOME/.cache/pf-target}"
 
 # The rerun crate's version, as Cargo.lock pins it.
 version="$(awk '$0 == "name = \"rerun\"" { getline; gsub(/[^0-9.]/, ""); print; exit }' Cargo.lock)"
