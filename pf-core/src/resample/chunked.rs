@@ -19,10 +19,9 @@
 //! Blocks are whole chunks of the batch filter, as few and as large as parallel work allows
 //! (see [`chunks_per_block`]): each block's Poisson counts overshoot its `M_b` by about
 //! `3√M_b` draws, which it then draws uniformly and removes, so small blocks cost more on
-//! one thread. At N = 10⁶ the filter with multinomial resampling took 13.5–14.2 ns per
-//! particle-step on one thread with blocks of one 2048-particle chunk, 12.1–12.6 with
-//! blocks of 2¹⁴ particles and 11.6 with 2¹⁶, against 10.9–11.1 before the split (best of
-//! interleaved rounds, scratch harness, 2026-11-25).
+//! one thread: at N = 10⁶ blocks of one 2048-particle chunk made the filter with
+//! multinomial resampling about 25 % slower on one thread than no split, blocks of 2¹⁴
+//! particles about 12 %.
 
 use super::multinomial::multinomial_draws;
 use super::residual::{ResidualSums, residual_draws, residual_sums};

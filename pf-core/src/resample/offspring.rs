@@ -62,8 +62,7 @@ pub(crate) fn prefix4_each(
 ///
 /// `W` is 8 (two vector stores) for multinomial resampling, whose Poisson counts spread
 /// widely: with 4, the branch to the loop for longer runs was mispredicted on about 2 % of
-/// the particles, and with 8 it ran 7.2 against 8.5 ns at N = 10⁶ and 8.5 against 9.2 at
-/// 10⁴ (best of six interleaved rounds, criterion, 2026-11-24). The other schemes keep 4
+/// the particles, and 8 is 8–15 % faster. The other schemes keep 4
 /// (one vector store): their counts stay within one or two of `M·W_j`, and with 8
 /// systematic ran 3 % slower and residual 5 % slower at N = 10⁴.
 pub(crate) struct Runs<const W: usize> {
@@ -78,24 +77,23 @@ impl<const W: usize> Runs<W> {
     /// Write `value` (`W` copies of one index) into `out[pos .. k]` (nothing when `k = pos`)
     /// and move to `k`. Callers keep the copies in a vector register and add 1 to them per
     /// particle, instead of broadcasting each particle's index: 2–4 % fewer instructions
-    /// for every scheme (callgrind, 20 calls at N = 10⁵, 2026-11-24). The `W`
+    /// for every scheme. The `W`
     /// copies go out with unconditional vector stores whatever the count; the next run
     /// overwrites the surplus. Once `out` is full, further (ordered) runs write nothing, so
     /// callers check [`is_full`](Self::is_full) once per block rather than after every run
-    /// (a branch per particle that cost systematic resampling 5–9 %, criterion at N = 10⁶,
-    /// 2026-11-24).
+    /// (a branch per particle that cost systematic resampling 5–9 %).
     ///
     /// Boundaries never decrease (they count points below non-decreasing cumulative
     /// weights), so the next run starts at `k` itself: taking `max(pos, k)` instead put a
     /// compare-and-select on the loop's critical path, which cost systematic resampling
-    /// 9 % (criterion at N = 10⁶, 2026-11-24). Should NaN weights break the order, each run
+    /// 9 %. Should NaN weights break the order, each run
     /// still starts where the previous one ended and the last ends at `M`, so every output
     /// is written and in range (tested).
     ///
     /// With `SMALL` (for `out.len() < 2³²`, so the position too) the position is read as 32
     /// bits, which tells the compiler that `pos + W` cannot overflow and drops one of the
     /// bound checks per run: 2.5 % fewer instructions for multinomial and residual, 7 % for
-    /// systematic and 4 % for stratified in their fitting blocks (callgrind).
+    /// systematic and 4 % for stratified in their fitting blocks.
     ///
     /// With `FIT` (only after [`fits`](Self::fits), which implies `SMALL`), `k` needs no
     /// clamp and the `W` copies no test for the end of `out`.
@@ -171,9 +169,8 @@ impl<const W: usize> Runs<W> {
 /// then the runs are written. The last particle's boundary is forced to `M`.
 ///
 /// A full block that [`Runs::fits`] writes its runs with no clamp and no end test per run,
-/// in a loop whose length is the constant [`SCAN`]: 4–7 % fewer instructions, and
-/// systematic resampling 7 % faster, stratified 5 % (the fastest of 5–6 interleaved runs of
-/// 2000–3000 calls at N = 10⁴ and 10⁶, 2026-11-24).
+/// in a loop whose length is the constant [`SCAN`]: systematic resampling 7 % faster,
+/// stratified 5 %.
 #[inline(always)]
 pub(crate) fn walk<B>(w: &[f64], mut boundaries: B, out: &mut [usize])
 where

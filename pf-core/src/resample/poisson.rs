@@ -131,15 +131,10 @@ impl Rates {
     /// of a group of eight still above the last continue term by term (see
     /// [`poisson_counts`]). Eight suit multinomial rates around 1 with a tail to 5, the
     /// benchmark's weights: with six, a quarter of the groups continued, and the
-    /// mispredicted exits cost more than two terms more for everyone (AVX-512 counts before
-    /// the fused sums, ns per particle: six terms 3.42, seven 2.78, eight 2.59, nine 2.57,
-    /// ten 2.77, twelve 3.30; with them, seven 1.99, eight 1.82, nine 1.81; scratch harness,
-    /// 2026-11-27). Residual rates are at most about 1, where four leave `P(N ≥ 4) < 1.9 %`
-    /// per particle: residual resampling at N = 10⁶ took 3.53–3.63 ns with four, 3.70–3.71
-    /// with five and 3.81 with three (criterion, 2026-11-27 evening). The single-precision
-    /// AVX-512 counts keep both choices: seven terms took multinomial to 3.29–3.46 ns
-    /// against 3.03–3.22 and nine or ten gained nothing, and residual took 3.49 with three
-    /// and 3.30 with five against 3.24 (interleaved rounds, 2026-11-27, eighth session).
+    /// mispredicted exits cost more than two terms more for everyone (eight terms count
+    /// 1.3× faster than six; nine gain nothing). Residual rates are at most about 1, where
+    /// four leave `P(N ≥ 4) < 1.9 %` per particle; three or five terms are 3–8 % slower.
+    /// The single-precision AVX-512 counts measure the same optimum.
     pub(crate) const fn terms(self) -> usize {
         match self {
             Rates::Scaled(_) => 8,
@@ -451,8 +446,7 @@ impl<F: Fn(usize) -> usize> Bases for Floors<F> {
 /// no clamp and no end test per run (as `offspring::walk` does). The writer stays on the AVX2
 /// copy on a CPU with AVX-512: compiled for AVX-512 (one store of eight copies), it ran
 /// multinomial resampling no faster and residual resampling 15–30 % slower, and once it
-/// visited only the particles with copies, multinomial 19 % slower (performance log,
-/// 2026-11-27).
+/// visited only the particles with copies, multinomial 19 % slower.
 pub(crate) fn write_runs<const W: usize>(
     simd: Simd,
     counts: &Counts,
@@ -519,8 +513,7 @@ impl<'a, const W: usize, const SMALL: bool> RunWriter<'a, W, SMALL> {
     ///
     /// The runs come from their bytes, not from the bases: for residual resampling the
     /// writer then makes no pass over the weights for the floors (nor copies out a block
-    /// of `usize` copies), which took it from 3.16 to 3.04 ns per particle at N = 10⁶ and
-    /// from 3.89 to 3.51 at 10⁴ (best of four interleaved rounds, 2026-11-28).
+    /// of `usize` copies): 4 % faster at N = 10⁶, 10 % at 10⁴.
     #[inline(always)]
     fn clean_block<B: Bases>(&mut self, base: &B, out: &mut [usize]) -> bool {
         let j0 = self.j0;

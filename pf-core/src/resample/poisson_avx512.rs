@@ -44,9 +44,8 @@
 //! with a lane whose count reaches the compared terms continues in `f32` a term at a time,
 //! inline.
 //!
-//! Sixteen lanes to a register halve the inversion's chains. At N = 10⁶, multinomial
-//! resampling took 3.03–3.10 ns against 3.49 with the `f64` inversion, and residual 3.05–3.10
-//! against 3.60 (best of interleaved rounds; performance log, 2026-11-27, eighth session).
+//! Sixteen lanes to a register halve the inversion's chains: at N = 10⁶ multinomial
+//! resampling is 13 % faster than with the `f64` inversion, residual 15 %.
 //! The counts equal the portable kernel's. That is tested in `poisson` and in `multinomial`,
 //! and here on lanes built to sit on the sums.
 
@@ -190,8 +189,8 @@ mod x86 {
             let mut fb = _mm512_setzero_si512();
             let mut escaped = 0u64;
             // Sixteen particles at a time (a pair of lane groups): with two or four such
-            // registers side by side, as the `f64` inversion had been, residual resampling
-            // took 3.24 against 3.05 ns per particle at N = 10⁶ and multinomial the same.
+            // registers side by side, as the `f64` inversion has, residual resampling is
+            // 6 % slower at N = 10⁶ and multinomial no faster.
             for h in 0..LANES / 16 {
                 let bits: [__m512i; 2] = std::array::from_fn(|q| step8(lanes.state(), 2 * h + q));
                 let mut floors = [zero; 2];
@@ -414,10 +413,8 @@ mod x86 {
     /// Terms of [`continue16`] taken before it first tests for the end: a lane that has
     /// stopped is masked out of them, so they change nothing but the branches. With a test
     /// per term, the loop's exit (data-dependent, so mispredicted about once per
-    /// continuing pair) came sooner after its entry; with 3, multinomial resampling took
-    /// 2.79–2.81 against 2.89 ns per particle at N = 10⁶ and 3.35–3.36 against 3.48 at
-    /// 10⁴, residual 2.53–2.54 against 2.63 (best of interleaved rounds, 2026-11-28). 2, 4
-    /// and 6 did about as well; 8 no better than none.
+    /// continuing pair) came sooner after its entry; with 3, multinomial and residual
+    /// resampling are 3–4 % faster. 2, 4 and 6 do about as well; 8 no better than none.
     const BATCH: usize = 3;
 
     /// The single-precision inversion continued from term `from` for the lanes in `more`

@@ -36,8 +36,8 @@ use std::cell::RefCell;
 /// The counts are the inversion of multinomial resampling's (`poisson_counts`, one lane
 /// uniform per particle and no search), with the rate `Λ·r_j ≤ 1` computed from each weight
 /// as it is read. They replaced a Poisson(`Λ`) number of candidates thinned with
-/// probability `r_j` (the same law, two lane draws per particle), which took 3.1–3.4 of the
-/// scheme's 6.0–6.3 ns per particle (performance log, 2026-11-27). The joint law of the
+/// probability `r_j` (the same law, two lane draws per particle), which took half the
+/// scheme's time. The joint law of the
 /// offspring counts is tested by chi-square.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Residual;
@@ -100,7 +100,7 @@ impl FloorLanes {
 /// partial sums at a time (a vectorisable loop). Everything is summed in floats, the floors
 /// too (integers below 2⁵³, so exactly), and the weights outside [0, 1] are counted rather
 /// than flagged: with an integer sum and a boolean beside the float ones, the pass took
-/// 14 % of residual resampling's time at N = 10⁴, and 10.7 % this way (performance log).
+/// 14 % of residual resampling's time at N = 10⁴, and 10.7 % this way.
 /// LLVM still compiles the count to a mix of scalar and vector compares, 11 instructions per
 /// weight; on a CPU with AVX-512 (and `simd` [`Simd::Auto`]) a twin does the whole blocks of
 /// eight into the same lanes, with the same bits wherever they are used (the residual mass
@@ -268,7 +268,7 @@ pub(crate) fn residual_draws<R: Rng + ?Sized>(
         distinct_sorted(t, t - r, rng, seen, removed);
         // Eight copies a store, as for multinomial: with four, the particles whose floor and
         // draws pass four (5 % on the bench's weights) took the run loop's slow branch, and
-        // the scheme ran 3.78 against 3.60 ns at N = 10⁶ (performance log, 2026-11-27).
+        // the scheme ran 5 % slower at N = 10⁶.
         let floor = |j: usize| floor_index(mf * w[j]).0;
         write_runs::<8>(simd, counts, removed, &Floors(floor), first, out);
         true

@@ -18,10 +18,9 @@
 //!
 //! The hash costs two 64-bit multiplies per particle, which AVX2 emulates in three 32-bit
 //! steps each; on a CPU with AVX-512 a twin ([`stratified_avx512`](super::stratified_avx512))
-//! makes them one instruction. Until 2026-11-28, the standalone scheme took `U_f` from a
-//! lane stream instead, the draw of the first particle of each stratum, passed down the
-//! block by a chain of selects: 2.95 ns per particle at N = 10⁶ against 2.22 with the
-//! hash on the twin, and 3.13 with the hash on AVX2 (best of interleaved rounds).
+//! makes them one instruction. The hash on the twin is 1.33× as fast as the draw of each
+//! stratum's first particle from a lane stream passed down the block by a chain of selects
+//! (on AVX2 the hash is 6 % slower than that).
 
 use super::Resample;
 use super::offspring::walk_weights;

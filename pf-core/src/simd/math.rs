@@ -14,7 +14,7 @@
 //! It replaced fdlibm's rational approximation (whose division and degree-5 polynomial
 //! in `r²` sit on one long dependency chain), being 29 % faster on its own (1.00 against
 //! 1.40 ns per weight, 2048 weights in L1) and making the batch filter 5–7 % faster; the
-//! table lookups are nearly half of its time (see `docs/performance-log.md`).
+//! table lookups are nearly half of its time (see `docs/performance.md`).
 
 // fdlibm's split of ln 2, digit for digit.
 #![allow(clippy::excessive_precision)]
@@ -41,8 +41,8 @@ pub fn exp_nonpositive(x: f64) -> f64 {
 /// The evaluation is a chain of dependent operations, and the CPU's scheduler holds only a
 /// few loop iterations of it, so a plain vectorised loop waits on latency. Written a step
 /// at a time over many lanes, the steps of different lanes are independent instructions
-/// side by side: the filter, which calls this on 64 lanes, ran about 7 % faster when this
-/// was done to the earlier `exp` (criterion, 2026-11-24). Every lane performs the same
+/// side by side: the filter, which calls this on 64 lanes, is about 7 % faster for it.
+/// Every lane performs the same
 /// operations as the one-lane case, so the results are the same bits.
 #[inline(always)]
 pub fn exp_nonpositive_lanes<const L: usize>(x: [f64; L]) -> [f64; L] {
@@ -150,8 +150,8 @@ pub(crate) const EXP2_64THS: [u64; 64] = [
 /// bits on every path (see the module docs of [`simd`](super)). Sixteen entries (every
 /// fourth of the 64-entry table) fit one pair of AVX-512 registers, where one permute looks
 /// them up; the 64 entries took four permutes and three blends, and with the fused steps
-/// the Poisson counts ran 1.85 against 2.3 ns per particle (performance log,
-/// 2026-11-27). Within 2 ulp of the platform's `exp` on its range (tested).
+/// the Poisson counts are 1.25× as fast. Within 2 ulp of the platform's `exp` on its range
+/// (tested).
 #[inline(always)]
 #[cfg_attr(not(test), allow(dead_code))] // the one-lane form: the docs' and the tests' reference
 pub(crate) fn exp_fma(x: f64) -> f64 {
@@ -203,11 +203,10 @@ fn exp_fma_in_place<const L: usize>(v: &mut [f64; L], finish: impl Fn(f64, f64) 
 ///
 /// Fused steps and a table that one permute reads take about 20 AVX-512 operations per
 /// eight weights, where [`exp_nonpositive`] takes about 31, since without fusing it must
-/// round as its portable copy does. The batch filter ran 2.98 against 3.16 ns per
-/// particle-step at N = 10⁴ with AVX-512. The price is paid elsewhere: the AVX2 copy ran
-/// 4.15 against 4.04 ns, since its table lookups are scalar loads whatever the table's
-/// size, and the portable copy's `mul_add`s are calls to the C library, 29 against 7.5 ns
-/// (performance log, 2026-11-27).
+/// round as its portable copy does: the batch filter is 6 % faster at N = 10⁴ with
+/// AVX-512. The price is paid elsewhere: the AVX2 copy is 2 % slower, since its table
+/// lookups are scalar loads whatever the table's size, and the portable copy's `mul_add`s
+/// are calls to the C library, about 4× slower.
 #[inline(always)]
 pub(crate) fn exp_fma_nonpositive(x: f64) -> f64 {
     let mut v = [x];
@@ -308,9 +307,8 @@ impl ChunkMap {
 /// `⌈x⌉` clamped to `[lo, hi]`, minus `lo`, as an index, for integers `0 ≤ lo ≤ hi < 2⁵¹`
 /// and `x < 2⁵¹` (the same as `ceil_index(x).clamp(lo, hi) − lo` for `x > −1`): the clamp in
 /// two float compare-and-selects rather than unsigned 64-bit ones, which AVX2 lacks. In the
-/// batch filter's boundaries: 19 instead of 26 instructions per four particles, 61.1 instead
-/// of 62.7 per particle-step, and 1.7 % faster (fastest of interleaved runs: 5.46 against
-/// 5.55 ns at N = 10⁴, 7.09 against 7.27 at 10⁶; 2026-11-24).
+/// batch filter's boundaries: 19 instead of 26 instructions per four particles, and the
+/// filter 2 % faster.
 #[inline(always)]
 pub(crate) fn ceil_index_in(x: f64, lo: f64, hi: f64) -> usize {
     let t = x + ROUND_MAGIC;

@@ -34,9 +34,9 @@ pub enum Simd {
     Avx2,
     /// Always the portable copy (baseline x86-64: SSE2), for comparison and audits. Kernels
     /// with fused multiply-adds compute them in the C library's `fma` here, which is exact
-    /// but slow: the batch filter took 29 ns per particle-step at N = 10⁴ against 3 on the
-    /// AVX-512 kernels (its weights' `exp` is fused), and 50 against 10 with multinomial
-    /// resampling (2026-11-27). It is also what `Auto` runs on an x86-64 CPU without AVX2
+    /// but slow: the batch filter is about 10× slower here than on the AVX-512 kernels (its
+    /// weights' `exp` is fused), 5× with multinomial resampling. It is also what `Auto`
+    /// runs on an x86-64 CPU without AVX2
     /// and FMA, where the C library computes `fma` in software.
     Portable,
 }

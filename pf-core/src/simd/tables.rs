@@ -12,7 +12,7 @@
 //! scalar path, with probability 1.49 % for the normal at 256 layers but 0.43 % at 1024
 //! (exponential: 2.22 % and 0.64 %). The 64-bit draw has room: 52 bits make the uniform and
 //! the low 10 the layer. The normal sampler went from 2.30 to 1.78 ns and the batch filter
-//! gained about 6 % (criterion, 2026-11-24); 2048 layers measured the same and 4096 slower
+//! gained about 6 %; 2048 layers measured the same and 4096 slower
 //! (the edge table, 8 KB here, starts to crowd the filter's chunk out of L1).
 //!
 //! **`R`** is the root of the closure condition: the recurrence started at `R` must reach
