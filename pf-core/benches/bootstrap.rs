@@ -80,7 +80,7 @@ fn bootstrap(c: &mut Criterion) {
 ///
 /// Fifty samples where a run of the filter takes 15 ms or less (N ≤ 10⁴), ten above: on a
 /// shared VM about one sample in five is slowed by other work, and the median of fifty
-/// stays with the rest (README, "Performance").
+/// stays with the rest (docs/performance.md, "How it is measured").
 fn batch(c: &mut Criterion) {
     let (model, ys) = ar1_case(STEPS);
     let mut group = c.benchmark_group("batch_ar1");

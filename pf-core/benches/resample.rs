@@ -15,7 +15,7 @@ fn resample(c: &mut Criterion) {
     for n in [10_000usize, 100_000, 1_000_000, 10_000_000] {
         // Fifty samples where a call takes a few milliseconds or less (N ≤ 10⁶), ten above:
         // as for the filter at N ≤ 10⁴, the median of fifty stays with the undisturbed
-        // samples on a shared VM (README, "What criterion's number is").
+        // samples on a shared VM (docs/performance.md, "How it is measured").
         group.sample_size(if n <= 1_000_000 { 50 } else { 10 });
         let raw: Vec<f64> = (0..n).map(|_| rng.random::<f64>().powi(4)).collect();
         let total: f64 = raw.iter().sum();
