@@ -23,11 +23,9 @@
 
 mod chunked;
 mod counts;
-mod floors_avx512;
 mod multinomial;
 mod offspring;
 mod poisson;
-mod poisson_avx512;
 mod residual;
 mod stratified;
 mod stratified_avx512;

@@ -12,7 +12,7 @@
 //! Each twin performs the same IEEE-754 operations, fused multiply-adds included, in the same
 //! order as its portable kernel, so the results are the same bits (tested against the
 //! portable and AVX2 copies). The one exception is the Poisson counts' twin in
-//! `resample::poisson_avx512`. It inverts in `f32` and keeps a count only where a margin
+//! `resample::poisson::avx512`. It inverts in `f32` and keeps a count only where a margin
 //! certifies it equal to the `f64` one, and redoes the rest with these blocks, so its
 //! counts are the same too. The intrinsics are safe to call inside functions compiled with
 //! the features they need; calling such a function is `unsafe` only because of the CPU

@@ -3,7 +3,7 @@
 //! the sums are the portable pass's, bit for bit, wherever they are used (tested in
 //! `residual`).
 
-use super::residual::FloorLanes;
+use super::FloorLanes;
 use crate::simd::avx512::{Avx512, on_avx512};
 
 /// The [`FloorLanes`] of the whole blocks of eight of `w`, and how many weights that is.

@@ -1,7 +1,9 @@
 //! The Poisson machinery of the O(N) multinomial draws: counts with a rate per particle
 //! (multinomial and residual resampling), the uniformly chosen draws removed when
 //! conditioning a Poisson total, and the runs of ancestors they leave.
-//! The counts have an AVX-512 twin in [`poisson_avx512`](super::poisson_avx512).
+//! The counts have an AVX-512 twin in [`avx512`].
+
+mod avx512;
 
 use super::counts::Counts;
 use super::offspring::{Runs, SCAN};
@@ -177,7 +179,7 @@ pub(crate) struct Tally {
 /// rounding). Rates above [`RATE_INVERT`] are drawn by `rand_distr` on `rng`, particle by
 /// particle in order. Exact up to the rounding of the sums (a few ulp of each probability).
 ///
-/// On a CPU with AVX-512 (and `simd` [`Simd::Auto`]) the twin in `poisson_avx512` runs: the
+/// On a CPU with AVX-512 (and `simd` [`Simd::Auto`]) the twin in `avx512` runs: the
 /// inversion in single precision, sixteen particles to a register, each count certified
 /// against this one's sums or redone with its operations. Otherwise the code below runs,
 /// compiled by [`dispatch`]. Both give the same counts (tested).
@@ -191,7 +193,7 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
 ) -> Tally {
     counts.reset(w.len());
     if let Some(cpu) = Avx512::get(simd) {
-        return super::poisson_avx512::poisson_counts(cpu, counts, w, rates, lanes, rng);
+        return avx512::poisson_counts(cpu, counts, w, rates, lanes, rng);
     }
     match rates.terms() {
         8 => dispatch(

@@ -1,6 +1,8 @@
 //! Residual resampling: deterministic copies, then multinomial on what is left, drawn per
 //! particle from Poisson counts.
 
+mod floors_avx512;
+
 use super::Resample;
 use super::counts::Counts;
 use super::offspring::SCAN;
@@ -108,7 +110,7 @@ impl FloorLanes {
 #[inline(always)]
 fn floors_and_mass(simd: Simd, w: &[f64], mf: f64) -> (ResidualSums, bool) {
     let (mut lanes, done) = match Avx512::get(simd) {
-        Some(cpu) => super::floors_avx512::floor_lanes(cpu, w, mf),
+        Some(cpu) => floors_avx512::floor_lanes(cpu, w, mf),
         None => (FloorLanes::default(), 0),
     };
     let rest = &w[done..];

@@ -1,10 +1,10 @@
-//! The AVX-512 twin of [`poisson_counts`](super::poisson::poisson_counts): the same
+//! The AVX-512 twin of [`poisson_counts`](super::poisson_counts): the same
 //! counts as the portable kernel, found in single precision and certified lane by lane.
 //!
 //! A block of 64 particles is four pairs of lane groups of eight. Each group steps its
 //! eight lanes of the [`LaneRng`] (the same draws as the portable lane step) and forms its
 //! rates in `f64`, so the rates' sums and the escapes above
-//! [`RATE_INVERT`](super::poisson::RATE_INVERT) are the portable kernel's. Each pair's
+//! [`RATE_INVERT`](super::RATE_INVERT) are the portable kernel's. Each pair's
 //! inversion then runs in one register of sixteen `f32` lanes: the rate rounded, the
 //! uniform's top 24 bits, a single-precision `e^λ` ([`exp16`](x86::exp16), its table scaled
 //! by `2⁻²⁴·(1 + δ)` so that `hi` below is one fused step), and the partial sums
@@ -49,13 +49,13 @@
 //! The counts equal the portable kernel's. That is tested in `poisson` and in `multinomial`,
 //! and here on lanes built to sit on the sums.
 
-use super::counts::Counts;
-use super::poisson::{Rates, Tally};
+use crate::resample::counts::Counts;
+use super::{Rates, Tally};
 use crate::simd::LaneRng;
 use crate::simd::avx512::{Avx512, on_avx512};
 use rand::Rng;
 
-/// [`poisson_counts`](super::poisson::poisson_counts) on AVX-512, into `counts` (already
+/// [`poisson_counts`](super::poisson_counts) on AVX-512, into `counts` (already
 /// reset for `w.len()` particles).
 pub(crate) fn poisson_counts<R: Rng + ?Sized>(
     cpu: Avx512,
@@ -81,8 +81,8 @@ pub(crate) fn poisson_counts<R: Rng + ?Sized>(
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::super::counts::Counts;
-    use super::super::poisson::{INV_FACTORIAL, RATE_INVERT, Rates, Tally, escape};
+    use crate::resample::counts::Counts;
+    use crate::resample::poisson::{INV_FACTORIAL, RATE_INVERT, Rates, Tally, escape};
     use crate::simd::avx512::x86::{exp_fma8, exp_table, load_pd, step8, unit8};
     use crate::simd::math::EXP2_16THS;
     use crate::simd::{LANES, LaneRng};
@@ -517,7 +517,7 @@ mod x86 {
 
     #[cfg(test)]
     mod tests {
-        use super::super::super::poisson::poisson_block;
+        use crate::resample::poisson::poisson_block;
         use super::*;
         use crate::mc::stream_rng;
         use crate::simd::Simd;
