@@ -49,8 +49,8 @@
 //! The counts equal the portable kernel's. That is tested in `poisson` and in `multinomial`,
 //! and here on lanes built to sit on the sums.
 
-use crate::resample::counts::Counts;
 use super::{Rates, Tally};
+use crate::resample::counts::Counts;
 use crate::simd::LaneRng;
 use crate::simd::avx512::{Avx512, on_avx512};
 use rand::Rng;
@@ -517,9 +517,9 @@ mod x86 {
 
     #[cfg(test)]
     mod tests {
-        use crate::resample::poisson::poisson_block;
         use super::*;
         use crate::mc::stream_rng;
+        use crate::resample::poisson::poisson_block;
         use crate::simd::Simd;
         use crate::simd::avx512::Avx512;
         use crate::simd::math::exp_fma;
