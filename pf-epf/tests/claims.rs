@@ -1,17 +1,20 @@
 //! The paper's claims on the simulated scenarios, over seeded replications, and the REC
 //! curves' properties.
 
-use pf_core::mc::{Par, mean_and_se};
+use pf_core::mc::mean_and_se;
 use pf_epf::experiments::{ComparisonConfig, Method, compare};
 use pf_epf::metrics::rec_of;
 use pf_epf::scenario::{Scenario, ScenarioConfig};
 
 /// Paired differences `EPF − NNSF` of the association error rate over `reps` runs.
 fn paired(s: ScenarioConfig, reps: usize, seed: u64) -> (f64, f64, f64, f64) {
-    let mut cfg = ComparisonConfig::new(s, reps);
+    let mut cfg = ComparisonConfig {
+        seed,
+        ..ComparisonConfig::new(s, reps)
+    };
     cfg.tracker.n_particles = 100;
     cfg.methods = vec![Method::Epf, Method::Nnsf];
-    let c = compare(&cfg, seed, Par::Rayon, &|| {}).unwrap();
+    let c = compare(&cfg).unwrap();
     let (epf, nnsf) = (&c.methods[0], &c.methods[1]);
     let d: Vec<f64> = epf
         .error_rate
@@ -69,10 +72,13 @@ fn epf_beats_nnsf_where_the_dynamics_disambiguate() {
 /// continuous, so none is exactly 0 almost surely) and reach 1 at the largest error.
 #[test]
 fn rec_curves_are_monotone_from_zero_to_one() {
-    let mut cfg = ComparisonConfig::new(ScenarioConfig::new(Scenario::Ants), 10);
+    let mut cfg = ComparisonConfig {
+        seed: 3,
+        ..ComparisonConfig::new(ScenarioConfig::new(Scenario::Ants), 10)
+    };
     cfg.tracker.n_particles = 100;
     cfg.methods = vec![Method::Epf, Method::Nnsf];
-    let c = compare(&cfg, 3, Par::Rayon, &|| {}).unwrap();
+    let c = compare(&cfg).unwrap();
     for m in &c.methods {
         for errs in &m.errors_per_target {
             let max = errs.iter().copied().fold(0.0, f64::max);
