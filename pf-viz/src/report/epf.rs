@@ -15,7 +15,7 @@ use pf_epf::experiments::{
     paper_energies, section4_with_progress,
 };
 use pf_epf::scenario::Scenario;
-use pf_epf::tracker::{EnergyTable, TrackerConfig};
+use pf_epf::tracker::TrackerConfig;
 
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
