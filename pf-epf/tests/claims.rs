@@ -96,3 +96,39 @@ fn rec_curves_are_monotone_from_zero_to_one() {
         }
     }
 }
+
+/// The report's experiment gives the same numbers on one thread as on the rayon pool (their
+/// serialised forms, which leave out where the replications ran, are equal), calls
+/// `tick` as often as `ticks` says, and its REC curves, pooled on one grid, reach 1.
+#[test]
+fn section4_is_the_same_on_any_thread_count() {
+    use pf_core::mc::{Par, Scale};
+    use pf_epf::experiments::{Section4Config, section4, section4_with_progress};
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    let cfg = Section4Config {
+        seed: 11,
+        ..Section4Config::at_scale(Scale::Quick)
+    };
+    let ticks = AtomicU64::new(0);
+    let pooled = section4_with_progress(&cfg, &|| {
+        ticks.fetch_add(1, Ordering::Relaxed);
+    })
+    .unwrap();
+    assert_eq!(ticks.into_inner(), cfg.ticks());
+    let alone = section4(&Section4Config {
+        par: Par::Seq,
+        ..cfg.clone()
+    })
+    .unwrap();
+    let json = |r| serde_json::to_value(r).unwrap();
+    assert!(json(&pooled) == json(&alone), "the results differ");
+    assert_eq!(pooled.scenarios.len(), Scenario::ALL.len());
+    for s in &pooled.scenarios {
+        assert_eq!(s.comparisons.len(), cfg.variants.len());
+        assert_eq!(s.rec.len(), 2 * s.truth.len(), "EPF and NNSF per target");
+        for r in &s.rec {
+            assert_eq!(r.curve.accuracy.last(), Some(&1.0), "{:?}", s.scenario);
+        }
+    }
+}
