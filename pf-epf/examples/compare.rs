@@ -1,10 +1,9 @@
 //! EPF against NNSF on the three scenarios: `cargo run --release --example compare -p pf-epf -- R`.
-use pf_core::mc::Par;
 use pf_epf::dynamics::SplineOrder;
 use pf_epf::experiments::{ComparisonConfig, Method, compare};
 use pf_epf::scenario::{Scenario, ScenarioConfig};
 
-fn main() -> Result<(), pf_epf::error::EpfError> {
+fn main() -> pf_epf::Result<()> {
     let reps: usize = std::env::args()
         .nth(1)
         .and_then(|a| a.parse().ok())
@@ -28,7 +27,7 @@ fn main() -> Result<(), pf_epf::error::EpfError> {
                 cfg.tracker.energy_spline = order;
                 cfg.tracker.energy.radius_cap = cap;
                 cfg.methods = vec![Method::Epf, Method::Nnsf];
-                let c = compare(&cfg, 1, Par::Rayon, &|| {})?;
+                let c = compare(&cfg)?;
                 let (e, n) = (&c.methods[0], &c.methods[1]);
                 println!(
                     "  {:12} clutter {clutter} miss {miss}: EPF {:.3} NNSF {:.3} (rmse {:.2} / {:.2})",

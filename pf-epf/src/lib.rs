@@ -13,7 +13,7 @@
 //! | Section 3 step 1: gates, energy minimisation, NNSF | [`association`], [`assignment`] |
 //! | Section 1 and step 2: B-spline dynamic-model update (ref. \[4\]) | [`dynamics`] |
 //! | Section 3 steps 3–6: one particle filter per target | [`model`], [`tracker`] |
-//! | Section 4: van–plane, walking men, ants | [`scenario`], [`experiments`] |
+//! | Section 4: van–plane, walking men, ants; the report's experiment | [`scenario`], [`experiments`] |
 //! | Fig. 4c: REC curves; RMSE, association error rate, OSPA | [`metrics`] |
 //!
 //! ```
@@ -29,7 +29,7 @@
 //! assert_eq!(result.tracks.len(), 2);
 //! let errors = association_errors(&result, &sim.detections);
 //! assert!(errors.rate() <= 1.0);
-//! # Ok::<(), pf_epf::error::EpfError>(())
+//! # Ok::<(), pf_epf::EpfError>(())
 //! ```
 //!
 //! ## References
@@ -47,6 +47,8 @@ pub mod metrics;
 pub mod model;
 pub mod scenario;
 pub mod tracker;
+
+pub use error::{EpfError, Result};
 
 /// The README's example, compiled and run as a doctest.
 #[doc = include_str!("../README.md")]

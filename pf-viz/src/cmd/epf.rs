@@ -9,9 +9,9 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
 use pf_core::mc::stream_rng;
+use pf_epf::EpfError;
 use pf_epf::association::Association;
 use pf_epf::data::{Detection, Detections, Init, InitRow};
-use pf_epf::error::EpfError;
 use pf_epf::geometry::Vec2;
 use pf_epf::scenario::{Scenario, ScenarioConfig, simulate};
 use pf_epf::tracker::{Record, TrackerConfig, energies_at, track};

@@ -1,34 +1,27 @@
 //! Report section for El Abed et al.: the energetic particle filter for multiple targets.
 //!
-//! The paper's videos are not available, so each of its three tests is simulated
-//! ([`pf_epf::scenario`]): van–plane (Fig. 2), walking men (Fig. 3, Table 1) and ants
-//! (Fig. 4, Table 2). Per scenario:
+//! Figures, tables and notes of [`pf_epf::experiments::section4`], which simulates each of
+//! the paper's three tests ([`pf_epf::scenario`]): van–plane (Fig. 2), walking men (Fig. 3,
+//! Table 1) and ants (Fig. 4, Table 2). Per scenario:
 //! - `epf-<scenario>-frames.png`: frames t−2, t−1, t, t+1 of one run (the paper's figure
 //!   layout) with detections, EPF and NNSF tracks, EPF's validation gates and associations;
 //! - `epf-<scenario>-rec.png`: REC curves per target, EPF against NNSF (Fig. 4c), pooled
 //!   over the replications;
 //! - the energy table at frame t (the style of Tables 1–2) and the error-rate, RMSE and
 //!   OSPA table over replications of the clean scenario and its clutter/miss variants.
-//!
-//! Randomness: comparison `v` of scenario `s` runs under seed `seed + 1000·s + 100·v`
-//! ([`pf_epf::experiments::compare`] derives its streams from it); the example run of
-//! scenario `s` simulates with stream `(seed, 50 + s)` and tracks with `(seed, 60 + s)`.
 
-use pf_core::mc::{Par, stream_rng};
-use pf_core::metrics::{RecCurve, tolerance_grid};
-use pf_epf::data::Detection;
-use pf_epf::experiments::{Comparison, ComparisonConfig, Method, compare, tracker_for};
-use pf_epf::metrics::rec_of;
-use pf_epf::scenario::{Scenario, ScenarioConfig, Simulation, TruthTrack, simulate};
-use pf_epf::tracker::{EnergyTable, Record, TrackResult, TrackerConfig, energies_at, track};
-use serde::{Deserialize, Serialize};
+use pf_epf::experiments::{
+    Comparison, Method, NotSmallest, PairedLoss, ScenarioResult, Section4Config, SmallestE,
+    paper_energies, section4_with_progress,
+};
+use pf_epf::scenario::Scenario;
+use pf_epf::tracker::TrackerConfig;
 
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
 use crate::png::rec::{RecPanel, RecPlot, RecSeries};
 use crate::png::style::{AxisScale, LegendPos};
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle, render_grid};
-use pf_core::mc::Scale;
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
@@ -39,133 +32,23 @@ pub const SECTION: Section = Section {
 
 const PAPER: &str = "epf";
 
-/// The section's sizes. The paper states none of them (it shows one run per sequence).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct EpfReportConfig {
-    /// Replications per scenario variant.
-    pub replications: usize,
-    /// Particles per target `N`.
-    pub n_particles: usize,
-    /// `(clutter per frame, miss probability)` of each variant; the first is the clean one.
-    pub variants: Vec<(f64, f64)>,
-    /// Points of the REC tolerance grid.
-    pub rec_points: usize,
-}
-
-impl EpfReportConfig {
-    /// The sizes for `scale`.
-    pub fn for_scale(scale: Scale) -> Self {
-        let (replications, n_particles) = match scale {
-            Scale::Quick => (6, 100),
-            Scale::Default => (1000, 300),
-            Scale::Full => (5000, 500),
-        };
-        EpfReportConfig {
-            replications,
-            n_particles,
-            variants: vec![(0.0, 0.0), (1.0, 0.1), (3.0, 0.2)],
-            rec_points: 201,
-        }
-    }
-}
-
-/// One method's REC curve for one target.
-#[derive(Debug, Clone, Serialize)]
-pub struct TargetRec {
-    /// The method.
-    pub method: Method,
-    /// Target id.
-    pub target: usize,
-    /// The curve.
-    pub curve: RecCurve,
-}
-
-/// Everything behind one scenario's figures and tables.
-#[derive(Debug, Clone, Serialize)]
-pub struct ScenarioResult {
-    /// The scenario.
-    pub scenario: Scenario,
-    /// The ablation of eq. (1) on the clean scenario (EPF with components left out).
-    pub ablation: Comparison,
-    /// The comparison per variant: means and standard errors, per-run error rates (the
-    /// pooled errors, per-run RMSE, OSPA and key-frame flags are dropped once used).
-    pub comparisons: Vec<Comparison>,
-    /// REC curves of the clean variant, per method and target.
-    pub rec: Vec<TargetRec>,
-    /// The example run's energies at the key frame.
-    pub energies: EnergyTable,
-    /// The example run's EPF and NNSF tracks.
-    pub example: Vec<(Method, TrackResult)>,
-    /// The example run's observed frames.
-    pub frames: Vec<i64>,
-    /// The example run's true paths.
-    pub truth: Vec<TruthTrack>,
-    /// The example run's detections, in file order.
-    pub detections: Vec<DetectionRow>,
-}
-
-/// One detection of the example run.
-#[derive(Debug, Clone, Copy, Serialize)]
-pub struct DetectionRow {
-    /// Frame.
-    pub frame: i64,
-    /// Position.
-    pub position: [f64; 2],
-    /// True source (−1: clutter).
-    pub target: i64,
-}
-
-/// The section's result.
-#[derive(Debug, Clone, Serialize)]
-pub struct EpfReportResult {
-    /// Sizes.
-    pub config: EpfReportConfig,
-    /// Master seed.
-    pub seed: u64,
-    /// Per scenario.
-    pub scenarios: Vec<ScenarioResult>,
-}
-
-/// The paper's energy magnitudes `E(T_i, M_j)`, rows `T_i`, columns `M_j` (M_j being T_j's
-/// detection): van–plane from the equations of Section 4, walking men from Table 1, ants
-/// from Table 2 (printed there ×100).
-fn paper_e(s: Scenario) -> Vec<Vec<f64>> {
-    match s {
-        Scenario::VanPlane => vec![vec![0.27, 0.68], vec![0.79, 0.43]],
-        Scenario::WalkingMen => vec![
-            vec![0.085, 0.51, 0.363],
-            vec![0.53, 0.32, 0.455],
-            vec![0.47, 0.37, 0.16],
-        ],
-        Scenario::Ants => [
-            [3.9, 38.1, 14.9, 26.7, 40.1, 36.7],
-            [13.7, 3.4, 18.9, 6.7, 32.6, 10.5],
-            [17.5, 15.2, 2.6, 10.8, 14.0, 18.1],
-            [25.9, 8.7, 20.4, 5.4, 17.6, 9.5],
-            [44.4, 50.1, 54.7, 56.1, 7.1, 53.6],
-            [16.6, 13.9, 19.4, 44.5, 8.7, 3.2],
-        ]
-        .iter()
-        .map(|r| r.iter().map(|v| v / 100.0).collect())
-        .collect(),
-    }
-}
+/// The methods the frames and REC figures show.
+const SHOWN: [Method; 2] = [Method::Epf, Method::Nnsf];
 
 fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
-    let cfg = EpfReportConfig::for_scale(ctx.scale);
-    let mut report = SectionReport::default();
-    let mut scenarios = Vec::new();
-    for (si, &s) in Scenario::ALL.iter().enumerate() {
-        let r = run_scenario(ctx, &cfg, si, s, &mut report)?;
-        scenarios.push(r);
-    }
-    notes(&scenarios, &mut report);
-    let mut result = EpfReportResult {
-        config: cfg,
+    let cfg = Section4Config {
         seed: ctx.seed,
-        scenarios,
+        ..Section4Config::at_scale(ctx.scale)
     };
+    let bar = ctx.progress.bar("epf", cfg.ticks());
+    let mut result =
+        section4_with_progress(&cfg, &|| bar.inc(1)).map_err(VizError::paper(PAPER))?;
+    bar.finish_and_clear();
+    let mut report = SectionReport::default();
+    for s in &result.scenarios {
+        scenario_report(ctx, &cfg, s, &mut report)?;
+    }
+    notes(&result.scenarios, &mut report);
     if ctx.write_rrd() {
         #[cfg(feature = "rrd")]
         {
@@ -187,80 +70,15 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     Ok(report)
 }
 
-fn run_scenario(
+/// One scenario's figures and tables.
+fn scenario_report(
     ctx: &Context<'_>,
-    cfg: &EpfReportConfig,
-    si: usize,
-    s: Scenario,
+    cfg: &Section4Config,
+    r: &ScenarioResult,
     report: &mut SectionReport,
-) -> Result<ScenarioResult> {
-    let paper = VizError::paper(PAPER);
-    let mut tracker = tracker_for(s);
-    tracker.n_particles = cfg.n_particles;
-    // The comparisons.
-    let bar = ctx.progress.bar(
-        &format!("epf {}", s.name()),
-        (cfg.replications * (cfg.variants.len() + 1)) as u64,
-    );
-    let mut comparisons = Vec::new();
-    for (vi, &(clutter, miss)) in cfg.variants.iter().enumerate() {
-        let cc = ComparisonConfig {
-            tracker,
-            ..ComparisonConfig::new(
-                ScenarioConfig {
-                    scenario: s,
-                    clutter,
-                    miss,
-                },
-                cfg.replications,
-            )
-        };
-        let seed = ctx
-            .seed
-            .wrapping_add(1000 * si as u64)
-            .wrapping_add(100 * vi as u64);
-        comparisons.push(compare(&cc, seed, Par::Rayon, &|| bar.inc(1)).map_err(paper)?);
-    }
-    // The ablation of eq. (1) on the clean scenario.
-    let ablation = compare(
-        &ComparisonConfig {
-            tracker,
-            methods: Method::ABLATIONS.to_vec(),
-            ..ComparisonConfig::new(ScenarioConfig::new(s), cfg.replications)
-        },
-        ctx.seed.wrapping_add(1000 * si as u64).wrapping_add(900),
-        Par::Rayon,
-        &|| bar.inc(1),
-    )
-    .map_err(paper)?;
-    bar.finish_and_clear();
-
-    // REC curves of the clean variant: EPF and NNSF per target.
-    let clean = &comparisons[0];
-    let shown = [Method::Epf, Method::Nnsf];
-    let max_err = clean
-        .methods
-        .iter()
-        .filter(|m| shown.contains(&m.method))
-        .flat_map(|m| m.errors_per_target.iter().flatten().copied())
-        .fold(0.0, f64::max);
-    let mut grid = tolerance_grid(max_err.max(1e-9), cfg.rec_points);
-    // `max·(m−1)/(m−1)` can round one ulp below the largest error; end exactly on it so
-    // every curve reaches 1.
-    if let Some(last) = grid.last_mut() {
-        *last = max_err.max(1e-9);
-    }
-    let mut rec = Vec::new();
-    for m in clean.methods.iter().filter(|m| shown.contains(&m.method)) {
-        for (k, errs) in m.errors_per_target.iter().enumerate() {
-            rec.push(TargetRec {
-                method: m.method,
-                target: k,
-                curve: rec_of(errs, &grid).map_err(paper)?,
-            });
-        }
-    }
-    let n_targets = clean.methods[0].errors_per_target.len();
+) -> Result<()> {
+    let s = r.scenario;
+    let n_targets = r.truth.len();
     let rec_plot = RecPlot {
         title: format!(
             "{}: REC curves per target, EPF against NNSF ({} runs)",
@@ -271,13 +89,13 @@ fn run_scenario(
         panels: (0..n_targets)
             .map(|k| RecPanel {
                 title: format!("T{}", k + 1),
-                curves: shown
+                curves: SHOWN
                     .iter()
-                    .filter_map(|&m| rec.iter().find(|r| r.method == m && r.target == k))
-                    .map(|r| RecSeries {
-                        name: r.method.label().into(),
-                        tolerance: r.curve.tolerance.clone(),
-                        accuracy: r.curve.accuracy.clone(),
+                    .filter_map(|&m| r.rec.iter().find(|c| c.method == m && c.target == k))
+                    .map(|c| RecSeries {
+                        name: c.method.label().into(),
+                        tolerance: c.curve.tolerance.clone(),
+                        accuracy: c.curve.accuracy.clone(),
                     })
                     .collect(),
             })
@@ -288,47 +106,8 @@ fn run_scenario(
     let rec_file = format!("epf-{}-rec.png", s.name());
     crate::png::rec::render(&ctx.path(&rec_file), &rec_plot)?;
 
-    // The example run.
-    let sim = simulate(
-        &ScenarioConfig::new(s),
-        &mut stream_rng(ctx.seed, 50 + si as u64),
-    )
-    .map_err(paper)?;
-    let mut example = Vec::new();
-    for m in shown {
-        let res = track(
-            &sim.detections,
-            &sim.init,
-            &m.configure(&tracker),
-            Record::Particles,
-            &mut stream_rng(ctx.seed, 60 + si as u64),
-        )
-        .map_err(paper)?;
-        example.push((m, res));
-    }
-    let energies = energies_at(
-        &sim.detections,
-        &sim.init,
-        &Method::Epf.configure(&tracker),
-        s.key_frame(),
-        &mut stream_rng(ctx.seed, 60 + si as u64),
-    )
-    .map_err(paper)?;
-    // The pooled errors are behind the REC curves, which are kept, and the tables show
-    // means and standard errors; dropping the raw per-run vectors (all but the error
-    // rates) keeps summary.json to a few MB at the default scale.
-    let mut ablation = ablation;
-    for c in comparisons.iter_mut().chain(std::iter::once(&mut ablation)) {
-        for m in &mut c.methods {
-            m.errors_per_target.clear();
-            m.rmse.clear();
-            m.ospa.clear();
-            m.key_frame_right.clear();
-        }
-    }
     let frames_file = format!("epf-{}-frames.png", s.name());
-    frames_figure(ctx, s, &sim, &example, &frames_file)?;
-
+    frames_figure(ctx, r, &frames_file)?;
     report.figures.push(Figure {
         file: frames_file,
         caption: format!(
@@ -344,7 +123,7 @@ fn run_scenario(
                 .collect::<Vec<_>>()
                 .join(", "),
             fig_no(s),
-            tracker.gate_probability
+            r.ablation.config.tracker.gate_probability
         ),
     });
     report.figures.push(Figure {
@@ -358,29 +137,10 @@ fn run_scenario(
             cfg.replications
         ),
     });
-    report.tables.push(energy_table(s, &sim, &energies));
-    report.tables.push(error_table(s, &comparisons));
-    report.tables.push(ablation_table(s, &ablation));
-    Ok(ScenarioResult {
-        scenario: s,
-        ablation,
-        comparisons,
-        rec,
-        energies,
-        example,
-        frames: sim.frames.clone(),
-        truth: sim.truth.clone(),
-        detections: sim
-            .detections
-            .rows()
-            .iter()
-            .map(|d| DetectionRow {
-                frame: d.frame,
-                position: [d.position.x, d.position.y],
-                target: d.target.unwrap_or(-1),
-            })
-            .collect(),
-    })
+    report.tables.push(energy_table(r));
+    report.tables.push(error_table(s, &r.comparisons));
+    report.tables.push(ablation_table(s, &r.ablation));
+    Ok(())
 }
 
 fn title(s: Scenario) -> &'static str {
@@ -406,23 +166,18 @@ fn panel_frames(s: Scenario) -> Vec<i64> {
     f[i.saturating_sub(2)..(i + 2).min(f.len())].to_vec()
 }
 
-fn frames_figure(
-    ctx: &Context<'_>,
-    s: Scenario,
-    sim: &Simulation,
-    example: &[(Method, TrackResult)],
-    file: &str,
-) -> Result<()> {
+fn frames_figure(ctx: &Context<'_>, r: &ScenarioResult, file: &str) -> Result<()> {
+    let s = r.scenario;
     let frames = panel_frames(s);
-    let rows = sim.detections.rows();
+    let rows = &r.detections;
     // One window for every panel: what the shown frames (and the one before) contain, at
     // equal scale on both axes for a panel about 1.6 times wider than high.
     let first = frames[0];
     let last = *frames.last().unwrap_or(&first);
     let shown = |f: i64| f >= first - 1 && f <= last;
     let mut pts: Vec<[f64; 2]> = Vec::new();
-    for t in &sim.truth {
-        for (f, p) in sim.frames.iter().zip(&t.position) {
+    for t in &r.truth {
+        for (f, p) in r.frames.iter().zip(&t.position) {
             if shown(*f) {
                 pts.push(*p);
             }
@@ -430,10 +185,10 @@ fn frames_figure(
     }
     pts.extend(
         rows.iter()
-            .filter(|d| shown(d.frame) && d.target.is_some())
-            .map(|d| [d.position.x, d.position.y]),
+            .filter(|d| shown(d.frame) && d.source().is_some())
+            .map(|d| d.position),
     );
-    if let Some((_, res)) = example.first() {
+    if let Some((_, res)) = r.example.first() {
         for (i, f) in res.frames.iter().enumerate() {
             if shown(*f) {
                 for t in &res.records[i].targets {
@@ -456,9 +211,9 @@ fn frames_figure(
     let y_range = (c[1] - 0.5 * h, c[1] + 0.5 * h);
     let mut panels = Vec::new();
     for &f in &frames {
-        let fi = sim.frames.iter().position(|&x| x == f).unwrap_or(0);
+        let fi = r.frames.iter().position(|&x| x == f).unwrap_or(0);
         let mut layers = Vec::new();
-        for t in &sim.truth {
+        for t in &r.truth {
             layers.push(Layer {
                 name: if t.target == 0 {
                     "true paths".into()
@@ -469,7 +224,7 @@ fn frames_figure(
                 kind: LayerKind::Path(t.position[..=fi].to_vec()),
             });
         }
-        for (mi, (m, res)) in example.iter().enumerate() {
+        for (mi, (m, res)) in r.example.iter().enumerate() {
             let style = XyStyle::Series(if mi == 0 { 0 } else { 3 });
             let Some(ri) = res.frames.iter().position(|&x| x == f) else {
                 continue;
@@ -500,20 +255,16 @@ fn frames_figure(
                     kind: LayerKind::Segments(
                         rec.targets
                             .iter()
-                            .filter_map(|t| {
-                                t.detection.map(|j| {
-                                    let y = rows[j].position;
-                                    [t.estimate, [y.x, y.y]]
-                                })
-                            })
+                            .filter_map(|t| t.detection.map(|j| [t.estimate, rows[j].position]))
                             .collect(),
                     ),
                 });
             }
         }
-        let dets: Vec<[f64; 2]> = rows[sim.detections.frame_rows(f)]
+        let dets: Vec<[f64; 2]> = rows
             .iter()
-            .map(|d| [d.position.x, d.position.y])
+            .filter(|d| d.frame == f)
+            .map(|d| d.position)
             .collect();
         layers.push(Layer {
             name: "detections".into(),
@@ -524,7 +275,7 @@ fn frames_figure(
             name: String::new(),
             style: XyStyle::Series(2),
             kind: LayerKind::Labels(
-                sim.truth
+                r.truth
                     .iter()
                     .map(|t| (t.position[fi], format!("T{}", t.target + 1)))
                     .collect(),
@@ -565,67 +316,40 @@ fn fmt3(x: f64) -> String {
     format!("{x:.3}")
 }
 
-/// `case` where EPF's mean error rate is above NNSF's: by how much, and whether beyond twice
-/// the standard error of the paired differences (both methods run on the same data in each
-/// replication, so the pairs, not the two spreads, measure the noise of the difference).
-/// `None` where EPF does at least as well, or the replications do not pair up.
-fn loss(case: &str, epf: &[f64], nnsf: &[f64]) -> Option<(String, bool)> {
-    if epf.len() != nnsf.len() || epf.len() < 2 {
-        return None;
-    }
-    let d: Vec<f64> = epf.iter().zip(nnsf).map(|(e, n)| e - n).collect();
-    let (mean, se) = pf_core::mc::mean_and_se(&d);
-    (mean > 0.0).then(|| {
-        let beyond = mean > 2.0 * se;
-        let side = if beyond { "beyond" } else { "within" };
-        let text = format!(
-            "{case}: {mean:+.3} ({side} 2 s.e. of the paired differences, {:.3})",
-            2.0 * se
-        );
-        (text, beyond)
-    })
+/// `case: +0.012 (beyond 2 s.e. of the paired differences, 0.008)`.
+fn loss_text(case: &str, l: &PairedLoss) -> String {
+    let side = if l.beyond_noise { "beyond" } else { "within" };
+    format!(
+        "{case}: {:+.3} ({side} 2 s.e. of the paired differences, {:.3})",
+        l.mean, l.two_se
+    )
 }
 
-/// Whether each target's smallest E among the detections in its gate is on its own
-/// detection, as in the paper's tables, and where the example run's assignment is wrong.
-fn smallest_e_verdict(rows: &[Detection], t: &EnergyTable) -> String {
-    let source = |j: usize| rows[t.detections[j]].target;
-    let name = |j: usize| source(j).map_or("a clutter detection".into(), |s| format!("M{}", s + 1));
-    let (mut right, mut wrong) = (Vec::new(), Vec::new());
-    for (k, &id) in t.targets.iter().enumerate() {
-        let target = format!("T{}", id + 1);
-        let own = (0..t.detections.len()).find(|&j| source(j) == Some(id));
-        let best = (0..t.detections.len())
-            .filter(|&j| t.gated[k][j])
-            .min_by(|&a, &b| t.e[k][a].total_cmp(&t.e[k][b]));
-        match (own, best) {
-            (None, _) => wrong.push(format!("{target}'s detection is missed at this frame")),
-            (Some(o), _) if !t.gated[k][o] => {
-                wrong.push(format!("{target}'s own detection lies outside its gate"))
-            }
-            // A tie with the true pair counts for it.
-            (Some(o), Some(b)) if t.e[k][o] <= t.e[k][b] => right.push(target),
-            (Some(o), Some(b)) => wrong.push(format!(
-                "{target}'s smallest is on {} ({:.3}), not on its own M{} ({:.3})",
-                name(b),
-                t.e[k][b],
-                id + 1,
-                t.e[k][o]
-            )),
-            (Some(_), None) => wrong.push(format!("{target}'s gate holds no detection")),
-        }
-    }
-    let misassigned: Vec<String> = t
-        .targets
+/// The energy caption's sentence on [`SmallestE`]: whether each target's smallest E among
+/// the detections in its gate is on its own detection, and where the assignment is wrong.
+fn smallest_e_text(v: &SmallestE) -> String {
+    let name = |s: Option<i64>| s.map_or("a clutter detection".into(), |s| format!("M{}", s + 1));
+    let right: Vec<String> = v.right.iter().map(|id| format!("T{}", id + 1)).collect();
+    let wrong: Vec<String> = v
+        .wrong
         .iter()
-        .enumerate()
-        .filter_map(|(k, &id)| {
-            let a = t.assignment[k]?;
-            let j = t.detections.iter().position(|&d| d == a)?;
-            (source(j) != Some(id)).then(|| format!("T{} ← {}", id + 1, name(j)))
+        .map(|(id, why)| {
+            let target = format!("T{}", id + 1);
+            match why {
+                NotSmallest::Missed => format!("{target}'s detection is missed at this frame"),
+                NotSmallest::OutsideGate => {
+                    format!("{target}'s own detection lies outside its gate")
+                }
+                NotSmallest::EmptyGate => format!("{target}'s gate holds no detection"),
+                NotSmallest::Elsewhere { on, e, own } => format!(
+                    "{target}'s smallest is on {} ({e:.3}), not on its own M{} ({own:.3})",
+                    name(*on),
+                    id + 1
+                ),
+            }
         })
         .collect();
-    let mut v = match (right.is_empty(), wrong.is_empty()) {
+    let mut text = match (right.is_empty(), wrong.is_empty()) {
         (_, true) => "among the detections in each target's gate, it is too.".to_owned(),
         (true, false) => format!(
             "among the detections in their gates, it is for no target: {}.",
@@ -637,25 +361,31 @@ fn smallest_e_verdict(rows: &[Detection], t: &EnergyTable) -> String {
             wrong.join("; ")
         ),
     };
-    if !misassigned.is_empty() {
-        v.push_str(&format!(
+    if !v.misassigned.is_empty() {
+        let pairs: Vec<String> = v
+            .misassigned
+            .iter()
+            .map(|(id, source)| format!("T{} ← {}", id + 1, name(*source)))
+            .collect();
+        text.push_str(&format!(
             " The example run associates wrongly at this frame: {}.",
-            misassigned.join(", ")
+            pairs.join(", ")
         ));
     }
-    v
+    text
 }
 
-fn energy_table(s: Scenario, sim: &Simulation, t: &EnergyTable) -> Table {
-    let rows = sim.detections.rows();
-    let paper = paper_e(s);
+fn energy_table(r: &ScenarioResult) -> Table {
+    let (s, t) = (r.scenario, &r.energies);
+    let source = |j: usize| r.detections[t.detections[j]].source();
+    let paper = paper_energies(s);
     // Columns M_j ordered by their true source, as the paper numbers them.
     let mut cols: Vec<usize> = (0..t.detections.len()).collect();
-    cols.sort_by_key(|&j| rows[t.detections[j]].target.unwrap_or(i64::MAX));
+    cols.sort_by_key(|&j| source(j).unwrap_or(i64::MAX));
     let mut out = Vec::new();
     for (k, &id) in t.targets.iter().enumerate() {
         for &j in &cols {
-            let src = rows[t.detections[j]].target;
+            let src = source(j);
             let m = src.map_or("clutter".to_string(), |s| format!("M{}", s + 1));
             let paper_cell = src
                 .and_then(|s| paper.get(k).and_then(|r| r.get(s as usize)))
@@ -694,7 +424,7 @@ fn energy_table(s: Scenario, sim: &Simulation, t: &EnergyTable) -> Table {
                 Scenario::WalkingMen => "Table 1",
                 Scenario::Ants => "Table 2 (printed there ×100)",
             },
-            smallest_e_verdict(sim.detections.rows(), t),
+            smallest_e_text(&r.smallest_e()),
         ),
         header: [
             "target",
@@ -916,24 +646,16 @@ fn notes(scenarios: &[ScenarioResult], report: &mut SectionReport) {
     // Where EPF loses to NNSF, and whether by more than the replications' noise.
     let mut worse = Vec::new();
     let mut explain_clutter = false;
-    for c in scenarios.iter().flat_map(|s| &s.comparisons) {
-        let get = |m: Method| c.methods.iter().find(|x| x.method == m);
-        if let (Some(e), Some(n)) = (get(Method::Epf), get(Method::Nnsf)) {
-            let sc = &c.config.scenario;
-            let case = format!(
-                "{} with clutter {}, miss {}",
-                title(sc.scenario),
-                sc.clutter,
-                sc.miss
-            );
-            worse.extend(
-                loss(&case, &e.error_rate, &n.error_rate).map(|(text, beyond)| {
-                    // The clutter note below explains the loss where it is real.
-                    explain_clutter |= beyond && sc.scenario == Scenario::Ants && sc.clutter >= 3.0;
-                    text
-                }),
-            );
-        }
+    for (sc, l) in scenarios.iter().flat_map(ScenarioResult::losses_to_nnsf) {
+        let case = format!(
+            "{} with clutter {}, miss {}",
+            title(sc.scenario),
+            sc.clutter,
+            sc.miss
+        );
+        worse.push(loss_text(&case, &l));
+        // The clutter note below explains the loss where it is real.
+        explain_clutter |= l.beyond_noise && sc.scenario == Scenario::Ants && sc.clutter >= 3.0;
     }
     report.notes.push(format!(
         "EPF's association error rate is above NNSF's in {} of the {} comparisons{}",
@@ -972,86 +694,64 @@ fn notes(scenarios: &[ScenarioResult], report: &mut SectionReport) {
 mod tests {
     use super::*;
 
-    /// Two targets and their detections 0 (of T1) and 1 (of T2), both in both gates, with
-    /// the energies `e` and the assignment `a`.
-    fn table(e: [[f64; 2]; 2], gated: [[bool; 2]; 2], a: [Option<usize>; 2]) -> EnergyTable {
-        let zero = vec![vec![0.0; 2]; 2];
-        EnergyTable {
-            frame: 3,
-            targets: vec![0, 1],
-            detections: vec![0, 1],
-            positions: vec![[0.0; 2]; 2],
-            raw: [zero.clone(), zero.clone(), zero.clone()],
-            weighted: [zero.clone(), zero.clone(), zero],
-            e: e.iter().map(|r| r.to_vec()).collect(),
-            gated: gated.iter().map(|r| r.to_vec()).collect(),
-            assignment: a.to_vec(),
-        }
-    }
-
-    fn rows() -> Vec<Detection> {
-        (0..2)
-            .map(|k| Detection {
-                frame: 3,
-                position: Default::default(),
-                target: Some(k),
-            })
-            .collect()
-    }
-
-    /// A loss is reported only where EPF's rate is above NNSF's, and called beyond the noise
-    /// only past twice the paired differences' standard error: a small loss that every
-    /// replication shares is real, the same mean loss from scattered pairs is not.
+    /// The note names the case, the signed loss, its side of the noise and the bound.
     #[test]
-    fn losses_to_nnsf_are_weighed_against_their_noise() {
-        assert_eq!(loss("a", &[0.2, 0.3], &[0.25, 0.35]), None);
-        assert_eq!(loss("short", &[0.3], &[0.2]), None);
-        let (steady, beyond) = loss("b", &[0.21, 0.31, 0.41], &[0.2, 0.3, 0.4]).unwrap();
-        assert!(beyond, "{steady}");
-        assert!(steady.starts_with("b: +0.010 (beyond"), "{steady}");
-        let (scattered, beyond) = loss("c", &[0.3, 0.2, 0.43], &[0.2, 0.3, 0.4]).unwrap();
-        assert!(!beyond && scattered.contains("within"), "{scattered}");
-    }
-
-    /// The caption's claim follows the energies: true pairs smallest, a wrong smallest
-    /// named with both values, an own detection outside the gate, and wrong assignments.
-    #[test]
-    fn the_smallest_e_claim_follows_the_table() {
-        let all = [[true; 2]; 2];
-        let right = smallest_e_verdict(
-            &rows(),
-            &table([[0.1, 0.9], [0.8, 0.2]], all, [Some(0), Some(1)]),
-        );
+    fn a_loss_reads_with_its_noise() {
+        let l = PairedLoss {
+            mean: 0.01,
+            two_se: 0.004,
+            beyond_noise: true,
+        };
         assert_eq!(
-            right,
+            loss_text("b", &l),
+            "b: +0.010 (beyond 2 s.e. of the paired differences, 0.004)"
+        );
+        let l = PairedLoss {
+            mean: 0.01,
+            two_se: 0.2,
+            beyond_noise: false,
+        };
+        assert!(loss_text("c", &l).contains("(within 2 s.e."));
+    }
+
+    /// The caption's sentence: all right, a wrong smallest named with both values, a
+    /// target outside its gate, and wrong assignments (clutter named as such).
+    #[test]
+    fn the_smallest_e_sentence_follows_the_verdict() {
+        let right = SmallestE {
+            right: vec![0, 1],
+            ..SmallestE::default()
+        };
+        assert_eq!(
+            smallest_e_text(&right),
             "among the detections in each target's gate, it is too."
         );
-        let swapped = smallest_e_verdict(
-            &rows(),
-            &table([[0.1, 0.9], [0.3, 0.5]], all, [Some(0), Some(0)]),
+        let swapped = SmallestE {
+            right: vec![0],
+            wrong: vec![(
+                1,
+                NotSmallest::Elsewhere {
+                    on: Some(0),
+                    e: 0.3,
+                    own: 0.5,
+                },
+            )],
+            misassigned: vec![(1, Some(0)), (0, None)],
+        };
+        assert_eq!(
+            smallest_e_text(&swapped),
+            "among the detections in their gates, it is for T1, but T2's smallest is on M1 \
+             (0.300), not on its own M2 (0.500). The example run associates wrongly at this \
+             frame: T2 ← M1, T1 ← a clutter detection."
         );
-        assert!(
-            swapped.contains(
-                "it is for T1, but T2's smallest is on M1 (0.300), not on its own M2 (0.500)"
-            ),
-            "{swapped}"
+        let none = SmallestE {
+            wrong: vec![(0, NotSmallest::Missed), (1, NotSmallest::OutsideGate)],
+            ..SmallestE::default()
+        };
+        assert_eq!(
+            smallest_e_text(&none),
+            "among the detections in their gates, it is for no target: T1's detection is \
+             missed at this frame; T2's own detection lies outside its gate."
         );
-        assert!(
-            swapped.contains("associates wrongly at this frame: T2 ← M1"),
-            "{swapped}"
-        );
-        let outside = smallest_e_verdict(
-            &rows(),
-            &table(
-                [[0.1, 0.9], [0.8, 0.2]],
-                [[true, true], [true, false]],
-                [Some(0), None],
-            ),
-        );
-        assert!(
-            outside.contains("T2's own detection lies outside its gate"),
-            "{outside}"
-        );
-        assert!(!outside.contains("wrongly"), "{outside}");
     }
 }

@@ -1,4 +1,5 @@
-//! `epf.rrd`: the example run of each scenario on the `frame` timeline.
+//! `epf.rrd`: the example run of each scenario of [`pf_epf::experiments::section4`] on the
+//! `frame` timeline.
 //!
 //! | entity | archetype | at frame `f` |
 //! |---|---|---|
@@ -14,13 +15,13 @@
 
 use std::path::Path;
 
+use pf_epf::experiments::{ScenarioResult, Section4Result};
 use rerun::components::Radius;
 use rerun::{LineStrips2D, Points2D, RecordingStream};
 
 use super::layout::{self, Node, View};
 use super::{FRAME, rrd_err, save_rrd};
 use crate::error::Result;
-use crate::report::epf::{EpfReportResult, ScenarioResult};
 
 const TRUTH: [u8; 4] = [170, 170, 170, 255];
 /// White: the viewer's background is dark.
@@ -47,7 +48,7 @@ fn method_path(label: &str) -> &'static str {
 ///
 /// # Errors
 /// A Rerun or I/O error naming `path`.
-pub fn save(path: &Path, result: &EpfReportResult) -> Result<()> {
+pub fn save(path: &Path, result: &Section4Result) -> Result<()> {
     save_rrd(path, "pf-viz: energetic particle filter", |rec, path| {
         layout::send(rec, &blueprint(result), Some(FRAME)).map_err(rrd_err(path))?;
         for s in &result.scenarios {
@@ -162,7 +163,7 @@ fn log_scenario(rec: &RecordingStream, path: &Path, s: &ScenarioResult) -> Resul
     Ok(())
 }
 
-fn blueprint(result: &EpfReportResult) -> Node {
+fn blueprint(result: &Section4Result) -> Node {
     let rows = result.scenarios.iter().map(|s| {
         let root = format!("/epf/{}", s.scenario.name());
         let view = |method: &str, label: &str| {

@@ -1,107 +1,13 @@
-//! The experiments of Section 4 on the synthetic scenarios: EPF against NNSF over seeded
-//! replications (association error rate, RMSE, OSPA, per-target errors for REC curves).
+//! EPF against NNSF on one scenario variant over seeded replications (association error
+//! rate, RMSE, OSPA, per-target errors for REC curves).
 
-use crate::association::Association;
-use crate::energy::E1Reference;
+use super::{Method, tracker_for};
 use crate::error::Result;
 use crate::metrics::{association_errors, mean_ospa, position_errors, rmse_of};
-use crate::scenario::{Scenario, ScenarioConfig, simulate};
+use crate::scenario::{ScenarioConfig, simulate};
 use crate::tracker::{Record, TrackerConfig, track};
 use pf_core::mc::{Par, mean_and_se, stream_rng, try_replicate};
 use serde::{Deserialize, Serialize};
-
-/// A tracker variant to compare.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Method {
-    /// EPF: global energy minimisation (optimal assignment).
-    Epf,
-    /// EPF with the paper's per-measurement argmin of eq. (1).
-    EpfArgmin,
-    /// NNSF: nearest neighbour in E¹'s distance (the paper's baseline).
-    Nnsf,
-    /// Nearest neighbour to the dynamic model's prediction `Â(t)` (not in the paper).
-    NnPredicted,
-    /// EPF with E² left out of eq. (1) (ablation).
-    EpfWithoutE2,
-    /// EPF with E³ left out of eq. (1) (ablation: Table 2's "necessity of E³").
-    EpfWithoutE3,
-    /// EPF with E¹ alone: NNSF's distance under the global assignment (ablation).
-    EpfE1Only,
-}
-
-impl Method {
-    /// The ablations of eq. (1), EPF first and NNSF last.
-    pub const ABLATIONS: [Method; 5] = [
-        Method::Epf,
-        Method::EpfWithoutE2,
-        Method::EpfWithoutE3,
-        Method::EpfE1Only,
-        Method::Nnsf,
-    ];
-
-    /// EPF, its argmin variant and both nearest-neighbour filters.
-    pub const ALL: [Method; 4] = [
-        Method::Epf,
-        Method::EpfArgmin,
-        Method::Nnsf,
-        Method::NnPredicted,
-    ];
-
-    /// Short label for tables and legends.
-    pub fn label(self) -> &'static str {
-        match self {
-            Method::Epf => "EPF",
-            Method::EpfArgmin => "EPF (argmin)",
-            Method::Nnsf => "NNSF",
-            Method::NnPredicted => "NN to Â(t)",
-            Method::EpfWithoutE2 => "EPF without E²",
-            Method::EpfWithoutE3 => "EPF without E³",
-            Method::EpfE1Only => "EPF with E¹ only",
-        }
-    }
-
-    /// `base` set up for this method.
-    pub fn configure(self, base: &TrackerConfig) -> TrackerConfig {
-        let mut c = *base;
-        match self {
-            Method::Epf => c.association = Association::Energy,
-            Method::EpfArgmin => c.association = Association::EnergyPerMeasurement,
-            Method::Nnsf => c.association = Association::Nearest,
-            Method::NnPredicted => {
-                c.association = Association::Nearest;
-                c.energy.e1_reference = E1Reference::Predicted;
-            }
-            Method::EpfWithoutE2 => {
-                c.association = Association::Energy;
-                c.energy.components = [true, false, true];
-            }
-            Method::EpfWithoutE3 => {
-                c.association = Association::Energy;
-                c.energy.components = [true, true, false];
-            }
-            Method::EpfE1Only => {
-                c.association = Association::Energy;
-                c.energy.components = [true, false, false];
-            }
-        }
-        c
-    }
-}
-
-/// The tracker settings used for a scenario: `r` is the scenario's detection noise, `q`
-/// covers its unmodelled motion (the ants' erratic walk needs a much wider `q`).
-pub fn tracker_for(scenario: Scenario) -> TrackerConfig {
-    let mut c = TrackerConfig {
-        r: scenario.noise(),
-        ..TrackerConfig::default()
-    };
-    c.q = match scenario {
-        Scenario::VanPlane | Scenario::WalkingMen => 0.3,
-        Scenario::Ants => 1.0,
-    };
-    c
-}
 
 /// One comparison: a scenario, a tracker, the methods and the replications.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -119,10 +25,22 @@ pub struct ComparisonConfig {
     pub ospa_c: f64,
     /// OSPA order `p`.
     pub ospa_p: f64,
+    /// The seed of every stream (see [the stream layout](super#random-streams)). Written
+    /// once, as [`Comparison::seed`], so it is not serialised here.
+    #[serde(skip_serializing, default = "default_seed")]
+    pub seed: u64,
+    /// Where the replications run; the result does not depend on it.
+    #[serde(skip)]
+    pub par: Par,
+}
+
+fn default_seed() -> u64 {
+    1
 }
 
 impl ComparisonConfig {
-    /// EPF and both nearest-neighbour filters on `scenario`, `replications` runs.
+    /// EPF and both nearest-neighbour filters on `scenario`, `replications` runs, seed 1, on
+    /// the rayon pool.
     pub fn new(scenario: ScenarioConfig, replications: usize) -> Self {
         ComparisonConfig {
             scenario,
@@ -131,6 +49,8 @@ impl ComparisonConfig {
             replications,
             ospa_c: 5.0,
             ospa_p: 2.0,
+            seed: default_seed(),
+            par: Par::Rayon,
         }
     }
 }
@@ -166,7 +86,7 @@ pub struct MethodSummary {
 pub struct Comparison {
     /// The configuration.
     pub config: ComparisonConfig,
-    /// The seed.
+    /// The seed, `config.seed`.
     pub seed: u64,
     /// Per method, in `config.methods` order.
     pub methods: Vec<MethodSummary>,
@@ -182,19 +102,26 @@ struct RunOutcome {
 
 /// Run the comparison: replication `r` simulates with stream `(seed, r)`, and method `i`
 /// tracks that simulation with stream `(seed + 1 + i, r)`, so the result is the same for
-/// any thread count. `tick` is called once per replication.
+/// any thread count.
 ///
 /// # Errors
 /// An invalid configuration or a filter error.
-pub fn compare(
+pub fn compare(cfg: &ComparisonConfig) -> Result<Comparison> {
+    compare_with_progress(cfg, &|| {})
+}
+
+/// [`compare()`], calling `tick` once per replication.
+///
+/// # Errors
+/// As [`compare()`].
+pub fn compare_with_progress(
     cfg: &ComparisonConfig,
-    seed: u64,
-    par: Par,
     tick: &(dyn Fn() + Sync),
 ) -> Result<Comparison> {
+    let seed = cfg.seed;
     cfg.scenario.validate()?;
     cfg.tracker.validate()?;
-    let runs: Vec<Vec<RunOutcome>> = try_replicate(seed, cfg.replications, par, |r, rng| {
+    let runs: Vec<Vec<RunOutcome>> = try_replicate(seed, cfg.replications, cfg.par, |r, rng| {
         let sim = simulate(&cfg.scenario, rng)?;
         let out = cfg
             .methods
