@@ -106,8 +106,12 @@ fn every_png_decodes_and_is_not_blank() {
 /// Why the tests that run the official Rerun tools are ignored by a plain `cargo test`.
 const NEEDS_RERUN: &str = "needs the Rerun CLI: run scripts/test.sh or set PF_RERUN";
 
-/// The Rerun CLI named by `PF_RERUN`; a test that needs it fails without it, never passes.
+/// The Rerun CLI named by `PF_RERUN`; a test that needs it fails without it (or without
+/// the `rrd` feature), never passes.
 fn rerun_cli() -> PathBuf {
+    if !cfg!(feature = "rrd") {
+        panic!("pf-viz was built without the rrd feature: there are no recordings to check");
+    }
     match std::env::var_os("PF_RERUN") {
         Some(p) => PathBuf::from(p),
         None => panic!("PF_RERUN is not set: {NEEDS_RERUN}"),
@@ -134,7 +138,6 @@ fn every_paper_has_a_recording() {
 #[test]
 #[ignore = "needs the Rerun CLI: run scripts/test.sh or set PF_RERUN"]
 fn every_recording_loads_in_the_official_rerun_tools() {
-    assert!(cfg!(feature = "rrd"), "built without the rrd feature");
     let rerun = rerun_cli();
     let rrds = files(report(), "rrd");
     assert!(rrds.len() >= PAPERS.len(), "recordings: {rrds:?}");
@@ -156,7 +159,6 @@ fn every_recording_loads_in_the_official_rerun_tools() {
 #[test]
 #[ignore = "needs the Rerun CLI: run scripts/test.sh or set PF_RERUN"]
 fn recordings_open_on_whole_runs_and_fixed_frames() {
-    assert!(cfg!(feature = "rrd"), "built without the rrd feature");
     let rerun = rerun_cli();
     let dir = report();
     // (recording, blueprint property, views that carry it)
