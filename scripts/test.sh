@@ -22,8 +22,11 @@ if [ ! -x "$venv/bin/rerun" ]; then
   python3 -m venv "$venv"
   "$venv/bin/pip" install --quiet --disable-pip-version-check "rerun-sdk==$version"
 fi
-# pf-viz's report test runs `$PF_RERUN rrd verify` on every recording it writes.
+# pf-viz's report tests run `$PF_RERUN rrd verify` and `rrd print` on its recordings.
 export PF_RERUN="$venv/bin/rerun"
 "$PF_RERUN" --version >&2
 
 cargo test --workspace
+# The tests that need the Rerun CLI are #[ignore]d by a plain `cargo test`; run them here
+# (with --workspace, so that Cargo resolves the same features and rebuilds nothing).
+cargo test --workspace --test report -- --ignored

@@ -46,14 +46,14 @@ pub struct BenchResult {
 /// Run the benchmark.
 ///
 /// # Errors
-/// Bad arguments (N = 0, n = 0, T = 0 or above [`MAX_THREADS`](crate::cli::MAX_THREADS),
+/// Bad arguments (N = 0, n = 0, T = 0 or above [`MAX_THREADS`](crate::error::MAX_THREADS),
 /// R = 0, more steps than data), unreadable data, or a filter failure.
 pub fn bootstrap(args: &BenchBootstrapArgs) -> Result<BenchResult> {
     let invalid = |message: String| VizError::Argument { message };
     if args.particles == 0 {
         return Err(invalid("--particles must be at least 1".into()));
     }
-    crate::cli::check_threads("--threads", args.threads)?;
+    crate::error::check_threads("--threads", args.threads)?;
     if let Some(n) = args.steps {
         check_count("--steps", n).map_err(VizError::core("bench"))?;
     }

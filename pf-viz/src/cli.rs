@@ -4,13 +4,9 @@ use std::ffi::OsString;
 use std::path::PathBuf;
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
-use serde::{Deserialize, Serialize};
 
-use crate::error::VizError;
-
-/// Most worker threads `--threads` and `--jobs` accept: far beyond any machine's cores, and
-/// small enough that building the pool takes well under a second (10 000 took minutes).
-pub const MAX_THREADS: usize = 1024;
+use crate::error::MAX_THREADS;
+use crate::report::{Options, RrdOutput};
 
 /// `pf-viz`: figures, tables and Rerun recordings for the pf papers.
 #[derive(Debug, Parser)]
@@ -154,23 +150,15 @@ pub struct ReportArgs {
     pub no_rrd: bool,
 }
 
-/// Whether `.rrd` recordings are written.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum RrdOutput {
-    /// Write them (when pf-viz is built with the `rrd` feature).
-    Write,
-    /// Skip them.
-    Skip,
-}
-
-impl RrdOutput {
-    /// From the `--no-rrd` flag and the build: `Skip` if either says so.
-    pub fn from_flag(no_rrd: bool) -> Self {
-        if no_rrd || !cfg!(feature = "rrd") {
-            RrdOutput::Skip
-        } else {
-            RrdOutput::Write
+impl From<ReportArgs> for Options {
+    fn from(a: ReportArgs) -> Self {
+        Options {
+            out: a.out,
+            seed: a.seed,
+            scale: a.scale,
+            only: a.only,
+            jobs: a.jobs.map(|j| j as usize),
+            rrd: RrdOutput::from_flag(a.no_rrd),
         }
     }
 }
@@ -178,22 +166,6 @@ impl RrdOutput {
 /// The parser of `--threads`: 1 to [`MAX_THREADS`], refused by clap as a usage error.
 fn thread_count() -> clap::builder::RangedU64ValueParser<usize> {
     clap::builder::RangedU64ValueParser::new().range(1..=MAX_THREADS as u64)
-}
-
-/// Check a thread count given as `flag`, for callers of the library that bypass clap: zero
-/// does nothing and more than [`MAX_THREADS`] takes minutes to start, so both are refused
-/// before any work.
-///
-/// # Errors
-/// [`VizError::Argument`] naming `flag` and the limit.
-pub fn check_threads(flag: &str, n: usize) -> Result<(), VizError> {
-    if (1..=MAX_THREADS).contains(&n) {
-        Ok(())
-    } else {
-        Err(VizError::Argument {
-            message: format!("{flag} must be between 1 and {MAX_THREADS}, got {n}"),
-        })
-    }
 }
 
 #[cfg(test)]
@@ -222,6 +194,9 @@ mod tests {
         };
         assert_eq!(a.seed, 1);
         assert!(!a.no_rrd);
+        let o = Options::from(a);
+        assert_eq!((o.seed, o.jobs, o.only.len()), (1, None, 0));
+        assert_eq!(o.rrd, RrdOutput::from_flag(false));
         assert!(Cli::try_parse_args(["pf-viz", "report"]).is_err());
         assert!(Cli::try_parse_args(["pf-viz", "report", "--out", "x", "--seed", "-3"]).is_err());
     }
@@ -242,11 +217,6 @@ mod tests {
         ] {
             let e = parse(args).unwrap_err();
             assert_eq!(e.kind(), clap::error::ErrorKind::ValueValidation, "{e}");
-        }
-        assert!(check_threads("--jobs", MAX_THREADS).is_ok());
-        for n in [0, MAX_THREADS + 1, usize::MAX] {
-            let e = check_threads("--jobs", n).unwrap_err();
-            assert!(e.to_string().contains("--jobs"), "{e}");
         }
     }
 }

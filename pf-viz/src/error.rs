@@ -1,6 +1,7 @@
-//! The one error type of pf-viz. The binary prints it as a single `error: …` line.
+//! The one error type of pf-viz, which the binary prints as a single `error: …` line, and
+//! the argument limits that the CLI and library callers share.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use pf_core::CoreError;
 use thiserror::Error;
@@ -89,6 +90,17 @@ pub enum VizError {
         /// What was inconsistent.
         message: String,
     },
+    /// Some report sections failed; every other one was written, and the pages and
+    /// `summary.json` in `out` name the failures.
+    #[error("{}", sections_message(out, *ran, failed))]
+    Sections {
+        /// The output directory.
+        out: PathBuf,
+        /// How many sections ran.
+        ran: usize,
+        /// Each failed section's name and one-line error, in the order they ran.
+        failed: Vec<(String, String)>,
+    },
     /// Rerun failed to record or save an `.rrd` file.
     #[error("{}: cannot write Rerun recording: {message}", path.display())]
     Rrd {
@@ -123,5 +135,79 @@ impl VizError {
     }
 }
 
+/// The one line of [`VizError::Sections`]: each failure once, prefixed by its section's name
+/// unless the error already starts with it.
+fn sections_message(out: &Path, ran: usize, failed: &[(String, String)]) -> String {
+    let each: Vec<String> = failed
+        .iter()
+        .map(|(name, e)| {
+            if e.starts_with(&format!("{name}: ")) {
+                e.clone()
+            } else {
+                format!("{name}: {e}")
+            }
+        })
+        .collect();
+    format!(
+        "{} of {ran} report section(s) failed (summary.json and the pages in {} name them): {}",
+        failed.len(),
+        out.display(),
+        each.join("; ")
+    )
+}
+
+/// Most worker threads `--threads` and `--jobs` accept: far beyond any machine's cores, and
+/// small enough that building the pool takes well under a second (10 000 took minutes).
+pub const MAX_THREADS: usize = 1024;
+
+/// Check a thread count given as `flag`, for callers of the library that bypass clap: zero
+/// does nothing and more than [`MAX_THREADS`] takes minutes to start, so both are refused
+/// before any work.
+///
+/// # Errors
+/// [`VizError::Argument`] naming `flag` and the limit.
+pub fn check_threads(flag: &str, n: usize) -> Result<()> {
+    if (1..=MAX_THREADS).contains(&n) {
+        Ok(())
+    } else {
+        Err(VizError::Argument {
+            message: format!("{flag} must be between 1 and {MAX_THREADS}, got {n}"),
+        })
+    }
+}
+
 /// Result alias for pf-viz.
 pub type Result<T, E = VizError> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thread_counts_are_bounded() {
+        assert!(check_threads("--jobs", 1).is_ok());
+        assert!(check_threads("--jobs", MAX_THREADS).is_ok());
+        for n in [0, MAX_THREADS + 1, usize::MAX] {
+            let e = check_threads("--jobs", n).unwrap_err();
+            assert!(e.to_string().contains("--jobs"), "{e}");
+        }
+    }
+
+    /// Each failure once, on one line, without naming its section twice.
+    #[test]
+    fn failed_sections_fit_one_line() {
+        let e = VizError::Sections {
+            out: PathBuf::from("out"),
+            ran: 3,
+            failed: vec![
+                ("mpf".into(), "mpf: calibration failed".into()),
+                ("core".into(), "out/genealogy.png: Is a directory".into()),
+            ],
+        };
+        assert_eq!(
+            e.to_string(),
+            "2 of 3 report section(s) failed (summary.json and the pages in out name them): \
+             mpf: calibration failed; core: out/genealogy.png: Is a directory"
+        );
+    }
+}

@@ -299,3 +299,61 @@ fn a_set_of_files_fails_before_any_is_replaced() {
     one_line_error(&out, "index.html a directory", &["index.html"]);
     assert_eq!(fs::read_to_string(format!("{r}/ess.png")).unwrap(), "old");
 }
+
+/// One failing section costs only itself. The failure is a real one, not a test hook: a
+/// directory stands where the core section writes its first figure, so that section fails,
+/// while the homotopy section after it runs as usual. The run still writes the homotopy
+/// figures, `summary.json` (with the failure under `failed`), `index.html` and `REPORT.md`
+/// (each naming the error), then exits non-zero with one `error:` line.
+#[test]
+fn a_failing_section_loses_nothing_else() {
+    let s = Scratch::new("failing");
+    let r = s.path("r");
+    fs::create_dir_all(format!("{r}/genealogy.png")).unwrap();
+    let out = pf_viz(&[
+        "report",
+        "--out",
+        &r,
+        "--scale",
+        "quick",
+        "--only",
+        "core,homotopy",
+        "--no-rrd",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "exit status");
+    let err = one_line_error(
+        &out,
+        "genealogy.png a directory",
+        &["1 of 2 report section(s) failed", "core: ", "genealogy.png"],
+    );
+    assert!(err.starts_with("error: "), "{err}");
+    assert!(out.stdout.is_empty(), "no success message");
+
+    let summary: serde_json::Value =
+        serde_json::from_slice(&fs::read(format!("{r}/summary.json")).unwrap()).unwrap();
+    let sections = summary["sections"].as_object().unwrap();
+    assert_eq!(sections.keys().collect::<Vec<_>>(), ["homotopy"]);
+    let failed = summary["failed"].as_object().unwrap();
+    assert_eq!(failed.keys().collect::<Vec<_>>(), ["core"]);
+    let failure = failed["core"].as_str().unwrap();
+    assert!(failure.contains("genealogy.png"), "{failure}");
+    assert!(err.contains(failure), "{err} lacks {failure}");
+
+    let pngs: Vec<String> = fs::read_dir(&r)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".png") && n != "genealogy.png")
+        .collect();
+    assert!(!pngs.is_empty(), "no figure written");
+    assert!(
+        pngs.iter().all(|n| n.starts_with("homotopy-")),
+        "only homotopy figures: {pngs:?}"
+    );
+    for page in ["index.html", "REPORT.md"] {
+        let text = fs::read_to_string(format!("{r}/{page}")).unwrap();
+        assert!(text.contains(failure), "{page} lacks the error");
+        for f in &pngs {
+            assert!(text.contains(f.as_str()), "{page} lacks {f}");
+        }
+    }
+}

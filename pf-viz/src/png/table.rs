@@ -12,7 +12,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use super::render_png_sized;
 use super::style::{self, plot_err};
 use crate::error::{Result, VizError};
-use crate::report::Table;
+use crate::figure::Table;
 
 /// Cell text size, px.
 const CELL_PX: u32 = 18;

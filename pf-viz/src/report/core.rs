@@ -17,8 +17,9 @@ use serde::{Deserialize, Serialize};
 
 use super::{Context, Figure, Section, SectionReport, to_json};
 use crate::error::{Result, VizError};
+use crate::figure::GenealogyData;
 use crate::png;
-use crate::png::genealogy::{GenealogyData, GenealogyLabels};
+use crate::png::genealogy::GenealogyLabels;
 use crate::png::line::{LinePlot, RefLine, Series};
 use crate::png::style::{AxisScale, LegendPos};
 

@@ -5,6 +5,10 @@
 //! [`SectionReport`]: every number behind them (for `summary.json`), plus the captions,
 //! tables and notes that `index.html` and `REPORT.md` show. Adding a paper = one file in
 //! `report/` plus one line in [`SECTIONS`].
+//!
+//! The report takes plain [`Options`] (the CLI converts its arguments into them). A section
+//! that fails costs only itself: the others are still written, and the pages and
+//! `summary.json` name the failure.
 
 pub mod core;
 pub mod dredge;
@@ -16,13 +20,14 @@ pub mod smooth;
 mod page;
 
 use std::collections::BTreeMap;
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use crate::cli::{ReportArgs, RrdOutput};
-use crate::error::{Result, VizError};
+use crate::error::{Result, VizError, check_threads};
+pub use crate::figure::Table;
 use crate::io::{check_writable, prepare_out_dir, write_json};
 use pf_core::mc::Scale;
 
@@ -89,19 +94,45 @@ pub struct Figure {
     pub caption: String,
 }
 
-/// A table of the report. Cells are preformatted strings; put the paper's value in its own
-/// column (e.g. `"N (paper)"`) so ours and theirs sit side by side.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Table {
-    /// Short id, unique within the section; the table is also rendered to
-    /// `<section>-<id>.png`.
-    pub id: String,
-    /// What the table shows, with the paper's table number.
-    pub caption: String,
-    /// Column headings.
-    pub header: Vec<String>,
-    /// Rows, each as long as `header`.
-    pub rows: Vec<Vec<String>>,
+/// What `pf-viz report` is asked to do, however it was asked (the CLI converts its
+/// arguments into this).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options {
+    /// The output directory (created if missing; must be writable).
+    pub out: PathBuf,
+    /// The master seed; every section derives its random streams from it.
+    pub seed: u64,
+    /// How much Monte Carlo work to do.
+    pub scale: Scale,
+    /// The sections to run, by name; all of them when empty.
+    pub only: Vec<String>,
+    /// Worker threads for the Monte Carlo replications, 1 to
+    /// [`MAX_THREADS`](crate::error::MAX_THREADS) (default: all cores). Results do not
+    /// depend on it.
+    pub jobs: Option<usize>,
+    /// Whether to write Rerun `.rrd` recordings.
+    pub rrd: RrdOutput,
+}
+
+/// Whether `.rrd` recordings are written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RrdOutput {
+    /// Write them (when pf-viz is built with the `rrd` feature).
+    Write,
+    /// Skip them.
+    Skip,
+}
+
+impl RrdOutput {
+    /// From the `--no-rrd` flag and the build: `Skip` if either says so.
+    pub fn from_flag(no_rrd: bool) -> Self {
+        if no_rrd || !cfg!(feature = "rrd") {
+            RrdOutput::Skip
+        } else {
+            RrdOutput::Write
+        }
+    }
 }
 
 /// What every section gets to know about the run.
@@ -188,7 +219,13 @@ pub struct Summary {
     /// Per section, JSON pointers into its result to the numbers that depend on measured
     /// time; everything else is identical for the same seed, whatever `--jobs`.
     pub timing_dependent: BTreeMap<&'static str, Vec<String>>,
+    /// The sections that failed, each with its one-line error; absent when none did.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub failed: BTreeMap<&'static str, String>,
 }
+
+/// What became of one section: its report, or the one-line error it failed with.
+pub type Outcome = std::result::Result<SectionReport, String>;
 
 /// The sections `--only` selects, in registry order; all of them when it is empty.
 ///
@@ -213,77 +250,123 @@ pub fn select(only: &[String]) -> Result<Vec<&'static Section>> {
         .collect())
 }
 
-/// Run the selected sections into `args.out`, then write `summary.json`, `index.html` and
+/// Run the selected sections into `opts.out`, then write `summary.json`, `index.html` and
 /// `REPORT.md`.
 ///
-/// The arguments are checked and the output directory is created and probed first, so bad
-/// arguments or an unwritable `--out` fail before any work is done. `--jobs` sizes the rayon
-/// pool the Monte Carlo replications run on; results do not depend on it.
+/// The options are checked and the output directory is created and probed first, so a bad
+/// `--only` or `--jobs` or an unwritable `--out` fails before any work is done. `--jobs`
+/// sizes the rayon pool the Monte Carlo replications run on; results do not depend on it.
+///
+/// A failing section (an error or a panic) does not stop the others: every section runs,
+/// every one that succeeded is written, and the pages and `summary.json` (under `failed`)
+/// give each failure's one-line error.
 ///
 /// # Errors
-/// The first failing section's error, or an I/O error naming the path at fault.
-pub fn run(args: &ReportArgs) -> Result<Summary> {
-    let selected = select(&args.only)?;
-    if let Some(jobs) = args.jobs {
-        crate::cli::check_threads("--jobs", jobs as usize)?;
+/// An I/O error naming the path at fault; [`VizError::Sections`], after everything else is
+/// written, when any section failed.
+pub fn run(opts: &Options) -> Result<Summary> {
+    let selected = select(&opts.only)?;
+    if let Some(jobs) = opts.jobs {
+        check_threads("--jobs", jobs)?;
     }
-    prepare_out_dir(&args.out)?;
+    prepare_out_dir(&opts.out)?;
     // The pages are written last: a name among them that cannot be written fails the run
     // before any figure is replaced.
-    let pages = [SUMMARY, INDEX, MARKDOWN].map(|f| args.out.join(f));
+    let pages = [SUMMARY, INDEX, MARKDOWN].map(|f| opts.out.join(f));
     check_writable(pages.iter().map(PathBuf::as_path))?;
     let mut pool = rayon::ThreadPoolBuilder::new();
-    if let Some(jobs) = args.jobs {
-        pool = pool.num_threads(jobs as usize);
+    if let Some(jobs) = opts.jobs {
+        pool = pool.num_threads(jobs);
     }
     let pool = pool.build().map_err(|e| VizError::Argument {
         message: format!("--jobs: cannot start the worker threads: {e}"),
     })?;
-    pool.install(|| run_sections(args, &selected))
+    let summary = pool.install(|| run_sections(opts, &selected))?;
+    if summary.failed.is_empty() {
+        Ok(summary)
+    } else {
+        Err(VizError::Sections {
+            out: opts.out.clone(),
+            ran: selected.len(),
+            failed: selected
+                .iter()
+                .filter_map(|s| Some((s.name.to_owned(), summary.failed.get(s.name)?.clone())))
+                .collect(),
+        })
+    }
 }
 
-fn run_sections(args: &ReportArgs, selected: &[&'static Section]) -> Result<Summary> {
-    let progress = Progress::new();
-    let ctx = Context {
-        out_dir: &args.out,
-        seed: args.seed,
-        scale: args.scale,
-        rrd: RrdOutput::from_flag(args.no_rrd),
-        progress: &progress,
-    };
-    let overall = progress.bar("report", selected.len() as u64);
-    let mut reports = Vec::with_capacity(selected.len());
-    for s in selected {
-        overall.set_message(s.title);
-        let mut report = (s.run)(&ctx)?;
+/// Run `section` and render its tables; an error or a panic becomes its one-line message.
+fn run_section(ctx: &Context<'_>, section: &Section) -> Outcome {
+    let run = || -> Result<SectionReport> {
+        let mut report = (section.run)(ctx)?;
         for t in &report.tables {
-            let file = format!("{}-{}.png", s.name, t.id);
+            let file = format!("{}-{}.png", section.name, t.id);
             crate::png::table::render(&ctx.path(&file), t)?;
             report.files.push(file);
         }
-        reports.push((**s, report));
+        Ok(report)
+    };
+    match catch_unwind(AssertUnwindSafe(run)) {
+        Ok(Ok(report)) => Ok(report),
+        Ok(Err(e)) => Err(one_line(&e.to_string())),
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| (*s).to_owned())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown cause".to_owned());
+            Err(one_line(&format!("{}: panicked: {what}", section.name)))
+        }
+    }
+}
+
+/// `s` on one line.
+fn one_line(s: &str) -> String {
+    s.replace(['\n', '\r'], " ")
+}
+
+fn run_sections(opts: &Options, selected: &[&'static Section]) -> Result<Summary> {
+    let progress = Progress::new();
+    let ctx = Context {
+        out_dir: &opts.out,
+        seed: opts.seed,
+        scale: opts.scale,
+        rrd: opts.rrd,
+        progress: &progress,
+    };
+    let overall = progress.bar("report", selected.len() as u64);
+    let mut outcomes: Vec<(Section, Outcome)> = Vec::with_capacity(selected.len());
+    for s in selected {
+        overall.set_message(s.title);
+        outcomes.push((**s, run_section(&ctx, s)));
         overall.inc(1);
     }
     overall.finish_and_clear();
+    let done = || {
+        outcomes
+            .iter()
+            .filter_map(|(s, o)| o.as_ref().ok().map(|r| (s, r)))
+    };
     let summary = Summary {
         tool: "pf-viz",
         version: env!("CARGO_PKG_VERSION"),
         seed: ctx.seed,
         scale: ctx.scale,
         rrd: ctx.rrd,
-        sections: reports
-            .iter()
-            .map(|(s, r)| (s.name, r.result.clone()))
-            .collect(),
-        timing_dependent: reports
-            .iter()
+        sections: done().map(|(s, r)| (s.name, r.result.clone())).collect(),
+        timing_dependent: done()
             .filter(|(_, r)| !r.timing_dependent.is_empty())
             .map(|(s, r)| (s.name, r.timing_dependent.clone()))
             .collect(),
+        failed: outcomes
+            .iter()
+            .filter_map(|(s, o)| o.as_ref().err().map(|e| (s.name, e.clone())))
+            .collect(),
     };
     write_json(&ctx.path(SUMMARY), &summary)?;
-    page::write_html(&ctx.path(INDEX), &summary, &reports)?;
-    page::write_markdown(&ctx.path(MARKDOWN), &summary, &reports)?;
+    page::write_html(&ctx.path(INDEX), &summary, &outcomes)?;
+    page::write_markdown(&ctx.path(MARKDOWN), &summary, &outcomes)?;
     Ok(summary)
 }
 
@@ -301,6 +384,110 @@ mod tests {
             names
                 .iter()
                 .all(|n| n.chars().all(|c| c.is_ascii_lowercase() || c == '_'))
+        );
+    }
+
+    fn failing(_: &Context<'_>) -> Result<SectionReport> {
+        Err(VizError::Argument {
+            message: "broken: failed on purpose\nover two lines".into(),
+        })
+    }
+
+    fn panicking(_: &Context<'_>) -> Result<SectionReport> {
+        panic!("panicked on purpose")
+    }
+
+    static BROKEN: Section = Section {
+        name: "broken",
+        title: "a section that fails",
+        run: failing,
+    };
+    static PANICS: Section = Section {
+        name: "panics",
+        title: "a section that panics",
+        run: panicking,
+    };
+
+    /// An error and a panic each cost only their own section: the sections around them are
+    /// written, and the summary and both pages give each failure on one line.
+    #[test]
+    fn a_failing_section_costs_only_itself() {
+        let out = std::env::temp_dir().join(format!("pf-viz-failing-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&out);
+        std::fs::create_dir_all(&out).unwrap();
+        let opts = Options {
+            out: out.clone(),
+            seed: 1,
+            scale: Scale::Quick,
+            only: Vec::new(),
+            jobs: Some(1),
+            rrd: RrdOutput::Skip,
+        };
+        let summary = run_sections(&opts, &[&BROKEN, &core::SECTION, &PANICS]).unwrap();
+        assert_eq!(
+            summary.sections.keys().copied().collect::<Vec<_>>(),
+            ["core"]
+        );
+        assert_eq!(
+            summary.failed.get("broken").map(String::as_str),
+            Some("broken: failed on purpose over two lines")
+        );
+        assert_eq!(
+            summary.failed.get("panics").map(String::as_str),
+            Some("panics: panicked: panicked on purpose")
+        );
+        for f in ["genealogy.png", "ess.png", SUMMARY, INDEX, MARKDOWN] {
+            assert!(out.join(f).is_file(), "{f} missing");
+        }
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(SUMMARY)).unwrap()).unwrap();
+        assert_eq!(
+            json["failed"]["panics"],
+            "panics: panicked: panicked on purpose"
+        );
+        assert!(json["sections"]["core"].is_object());
+        let html = std::fs::read_to_string(out.join(INDEX)).unwrap();
+        let md = std::fs::read_to_string(out.join(MARKDOWN)).unwrap();
+        for page in [&html, &md] {
+            assert!(page.contains("broken: failed on purpose over two lines"));
+            assert!(page.contains("panics: panicked: panicked on purpose"));
+            assert!(page.contains("genealogy.png"));
+        }
+        std::fs::remove_dir_all(&out).unwrap();
+    }
+
+    /// With nothing failed, `summary.json` has no `failed` key: its shape is unchanged.
+    #[test]
+    fn no_failed_key_without_failures() {
+        let summary = Summary {
+            tool: "pf-viz",
+            version: "0",
+            seed: 1,
+            scale: Scale::Quick,
+            rrd: RrdOutput::Skip,
+            sections: BTreeMap::new(),
+            timing_dependent: BTreeMap::new(),
+            failed: BTreeMap::new(),
+        };
+        let json = serde_json::to_value(&summary).unwrap();
+        let mut keys: Vec<&str> = json
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        keys.sort_unstable();
+        assert_eq!(
+            keys,
+            [
+                "rrd",
+                "scale",
+                "sections",
+                "seed",
+                "timing_dependent",
+                "tool",
+                "version"
+            ]
         );
     }
 }

@@ -10,8 +10,7 @@ use std::path::Path;
 
 use base64::Engine as _;
 
-use super::{Section, SectionReport, Summary, Table};
-use crate::cli::RrdOutput;
+use super::{Outcome, RrdOutput, Section, Summary, Table};
 use crate::error::{Result, VizError};
 use crate::io::write_atomic;
 
@@ -44,6 +43,7 @@ table{border-collapse:collapse;margin:.8em 0;font-size:.92em}\
 th,td{border:1px solid #999;padding:.25em .6em;text-align:right}\
 th{background:#eee}caption{caption-side:top;text-align:left;font-weight:bold;padding:.3em 0}\
 .note{background:#fff6d6;border-left:4px solid #c90;padding:.4em .8em;margin:.6em 0}\
+.failed{background:#fde4e4;border-left:4px solid #c00;padding:.4em .8em;margin:.6em 0}\
 nav a{margin-right:1em}code{background:#f3f3f3;padding:0 .2em}";
 
 fn html_table(out: &mut String, t: &Table) {
@@ -66,11 +66,7 @@ fn html_table(out: &mut String, t: &Table) {
 ///
 /// # Errors
 /// An I/O error naming the figure that cannot be read or the page that cannot be written.
-pub fn write_html(
-    path: &Path,
-    summary: &Summary,
-    reports: &[(Section, SectionReport)],
-) -> Result<()> {
+pub fn write_html(path: &Path, summary: &Summary, reports: &[(Section, Outcome)]) -> Result<()> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut out = String::new();
     let _ = write!(
@@ -89,8 +85,22 @@ pub fn write_html(
         let _ = write!(out, "<a href=\"#{}\">{}</a>", s.name, esc(s.name));
     }
     out.push_str("</nav>\n");
+    if let Some(line) = failures(summary) {
+        let _ = writeln!(out, "<p class=\"failed\">{}</p>", esc(&line));
+    }
     for (s, r) in reports {
         let _ = writeln!(out, "<h2 id=\"{}\">{}</h2>", s.name, esc(s.title));
+        let r = match r {
+            Ok(r) => r,
+            Err(e) => {
+                let _ = writeln!(
+                    out,
+                    "<p class=\"failed\">This section failed: {}</p>",
+                    esc(e)
+                );
+                continue;
+            }
+        };
         for note in &r.notes {
             let _ = writeln!(out, "<p class=\"note\">{}</p>", esc(note));
         }
@@ -137,6 +147,18 @@ fn recordings(summary: &Summary) -> &'static str {
     }
 }
 
+/// The line that heads the pages when sections failed, naming them.
+fn failures(summary: &Summary) -> Option<String> {
+    (!summary.failed.is_empty()).then(|| {
+        let names: Vec<&str> = summary.failed.keys().copied().collect();
+        format!(
+            "Failed sections (each shows its error below, and summary.json lists them under \
+             \"failed\"): {}.",
+            names.join(", ")
+        )
+    })
+}
+
 /// Write `REPORT.md`, linking the figures beside it.
 ///
 /// # Errors
@@ -144,7 +166,7 @@ fn recordings(summary: &Summary) -> &'static str {
 pub fn write_markdown(
     path: &Path,
     summary: &Summary,
-    reports: &[(Section, SectionReport)],
+    reports: &[(Section, Outcome)],
 ) -> Result<()> {
     let mut out = String::new();
     let _ = write!(
@@ -157,8 +179,18 @@ pub fn write_markdown(
         scale_name(summary),
         recordings(summary),
     );
+    if let Some(line) = failures(summary) {
+        let _ = write!(out, "\n> **{line}**\n");
+    }
     for (s, r) in reports {
         let _ = write!(out, "\n## {}\n\n", s.title);
+        let r = match r {
+            Ok(r) => r,
+            Err(e) => {
+                let _ = writeln!(out, "> **This section failed:** {e}");
+                continue;
+            }
+        };
         for note in &r.notes {
             let _ = write!(out, "> **Note.** {note}\n\n");
         }

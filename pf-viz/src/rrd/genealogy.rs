@@ -26,7 +26,7 @@ use rerun::{LineStrips2D, Points2D, RecordingStream, Scalars, SeriesLines};
 use super::layout::{self, Bounds, Node, View};
 use super::{STEP, rrd_err, save_rrd};
 use crate::error::{Result, VizError};
-use crate::png::genealogy::GenealogyData;
+use crate::figure::GenealogyData;
 
 /// Root entity of the genealogy.
 pub const ROOT: &str = "core/genealogy";

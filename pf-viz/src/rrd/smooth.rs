@@ -26,7 +26,7 @@ use super::genealogy::{Frame, GenealogyExtras, frame_bounds, log_axes, log_genea
 use super::layout::{self, Bounds, Corner, Node, View};
 use super::{ITERATION, rrd_err, save_rrd};
 use crate::error::Result;
-use crate::png::genealogy::GenealogyData;
+use crate::figure::GenealogyData;
 
 /// Root entity of the genealogy.
 pub const GENEALOGY: &str = "smooth/genealogy";
