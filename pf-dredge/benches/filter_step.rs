@@ -7,7 +7,7 @@ use pf_dredge::estimator::{EstimatorConfig, OnlineEstimator};
 use pf_dredge::simulator::{SimConfig, simulate};
 
 fn bench(c: &mut Criterion) {
-    let data = simulate(&SimConfig::default(), 1)
+    let data = simulate(&SimConfig::default(), &mut stream_rng(1, 0))
         .expect("default cycle")
         .to_data();
     let mut g = c.benchmark_group("dredge_step");

@@ -6,7 +6,7 @@ use pf_dredge::estimator::{EstimatorConfig, OnlineEstimator};
 use pf_dredge::simulator::{SimConfig, simulate};
 
 fn main() -> Result<(), pf_dredge::DredgeError> {
-    let data = simulate(&SimConfig::default(), 1)?.to_data();
+    let data = simulate(&SimConfig::default(), &mut stream_rng(1, 0))?.to_data();
     let mut online = OnlineEstimator::new(&EstimatorConfig::default())?;
     let mut rng = stream_rng(0, 0);
     for k in (0..data.len()).take(2000) {

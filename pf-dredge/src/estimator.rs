@@ -22,7 +22,7 @@ use crate::error::{DredgeError, Result};
 use crate::model::{Inflow, M_T, Measurement, OverflowModel, Prior, Q_O, RHO_O, State, V_T};
 use pf_core::CoreError;
 use pf_core::filter::{EssThreshold, FilterConfig, ParticleFilter, ResamplePolicy};
-use pf_core::mc::{Par, try_replicate};
+use pf_core::mc::{Par, PfRng, stream_rng, try_replicate};
 use pf_core::metrics::ResidualSummary;
 use pf_core::observe::{Observer, StepView};
 use pf_core::resample::Resampler;
@@ -456,6 +456,58 @@ pub fn summarise(truth: &[Option<f64>], estimate: &[f64]) -> Result<Option<Resid
         return Ok(None);
     }
     Ok(Some(ResidualSummary::new(&r)?))
+}
+
+/// The on-line twin of [`estimate`]: `cfg.runs` on-line estimators, run `r` on the stream
+/// `(seed, r)` as [`estimate`]'s, each sample pushed through all of them and their mean
+/// returned at once. The mean is accumulated in [`estimate`]'s order, so the two print the
+/// same numbers.
+pub struct OnlineMean {
+    filters: Vec<(OnlineEstimator, PfRng)>,
+}
+
+impl OnlineMean {
+    /// One estimator per run, nothing pushed yet.
+    ///
+    /// # Errors
+    /// An invalid filter configuration, or no runs.
+    pub fn new(cfg: &EstimateConfig) -> Result<Self> {
+        if cfg.runs == 0 {
+            return Err(DredgeError::InvalidParameter {
+                name: "runs",
+                value: 0.0,
+                reason: "at least one filter run",
+            });
+        }
+        let filters = (0..cfg.runs)
+            .map(|r| {
+                Ok((
+                    OnlineEstimator::new(&cfg.filter)?,
+                    stream_rng(cfg.seed, r as u64),
+                ))
+            })
+            .collect::<Result<_>>()?;
+        Ok(OnlineMean { filters })
+    }
+
+    /// Push the next sample through every run; the mean of their estimates.
+    ///
+    /// # Errors
+    /// As [`OnlineEstimator::push`], from the first run that fails.
+    pub fn push(&mut self, s: &Sample) -> Result<OnlineEstimate> {
+        let r = self.filters.len() as f64;
+        let mut est = OnlineEstimate {
+            t: s.t,
+            q_o: 0.0,
+            rho_o: 0.0,
+        };
+        for (f, rng) in &mut self.filters {
+            let e = f.push(s, rng)?;
+            est.q_o += e.q_o / r;
+            est.rho_o += e.rho_o / r;
+        }
+        Ok(est)
+    }
 }
 
 /// Estimate `Q_o` and `ρ_o` from a data set: `R` filter runs (in parallel, deterministic for

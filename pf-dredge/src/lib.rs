@@ -26,7 +26,7 @@
 //!
 //! // A short simulated cycle (phase 1 only), estimated on line with 200 particles.
 //! let sim = SimConfig { t_end: 300.0, ..SimConfig::default() };
-//! let data = simulate(&sim, 7)?.to_data();
+//! let data = simulate(&sim, &mut stream_rng(7, 1))?.to_data();
 //! let mut online = OnlineEstimator::new(&EstimatorConfig::default().with_particles(200))?;
 //! let mut rng = stream_rng(7, 0);
 //! for k in 0..data.len() {
@@ -49,6 +49,7 @@ pub mod simulator;
 pub use data::{DredgeData, Sample, Truth};
 pub use error::{DredgeError, Result};
 pub use estimator::{
-    EstimateConfig, EstimateOutput, EstimatorConfig, OnlineEstimate, OnlineEstimator, estimate,
+    EstimateConfig, EstimateOutput, EstimatorConfig, OnlineEstimate, OnlineEstimator, OnlineMean,
+    estimate,
 };
 pub use simulator::{Cycle, SimConfig, simulate};

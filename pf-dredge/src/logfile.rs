@@ -337,7 +337,7 @@ mod tests {
                 t_end: 200.0,
                 ..Default::default()
             },
-            3,
+            &mut pf_core::mc::stream_rng(3, 0),
         )
         .unwrap()
         .to_data();

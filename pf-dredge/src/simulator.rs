@@ -20,13 +20,14 @@
 //! sample: `Q_o,k = (1/T_s) ∫ Q_o dt`, `ρ_o,k = ∫ Q_o ρ_o dt / ∫ Q_o dt`. With these the
 //! discretised balances (9)–(10) hold exactly, which is what the estimator's model (13) assumes.
 //!
-//! The cycle is a deterministic function of the [`SimConfig`] and the seed: the input
-//! fluctuations use stream 0 of the seed and the measurement noise stream 1
-//! ([`pf_core::mc::stream_rng`]).
+//! The cycle is a deterministic function of the [`SimConfig`] and the random numbers it is
+//! given: [`simulate`] draws the input fluctuations and then the measurement noise from one
+//! generator, [`simulate_streams`] from two, so that the noise can be redrawn over the same
+//! true cycle. The experiments use streams 0 and 1 of their seed
+//! ([`crate::experiments::CycleConfig`]).
 
 use crate::error::{DredgeError, Result, check_non_negative, check_positive};
 use crate::sedimentation::HopperParams;
-use pf_core::mc::stream_rng;
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -345,16 +346,48 @@ fn inflow<R: Rng + ?Sized>(cfg: &SimConfig, n: usize, rng: &mut R) -> (Vec<f64>,
     (q, rho)
 }
 
-/// Simulate one loading cycle.
+/// Simulate one loading cycle, drawing the input fluctuations and then the measurement noise
+/// from `rng`.
 ///
 /// # Errors
 /// An invalid configuration ([`SimConfig::validate`]).
-pub fn simulate(cfg: &SimConfig, seed: u64) -> Result<Cycle> {
+pub fn simulate<R: Rng + ?Sized>(cfg: &SimConfig, rng: &mut R) -> Result<Cycle> {
     cfg.validate()?;
+    let (q_i, rho_i) = inflow(cfg, samples(cfg), rng);
+    run(cfg, &q_i, &rho_i, rng)
+}
+
+/// Simulate one loading cycle, the input fluctuations drawn from `inflow_rng` and the
+/// measurement noise from `noise_rng`: the same `inflow_rng` gives the same true cycle
+/// whatever the noise.
+///
+/// # Errors
+/// An invalid configuration ([`SimConfig::validate`]).
+pub fn simulate_streams<R: Rng + ?Sized, S: Rng + ?Sized>(
+    cfg: &SimConfig,
+    inflow_rng: &mut R,
+    noise_rng: &mut S,
+) -> Result<Cycle> {
+    cfg.validate()?;
+    let (q_i, rho_i) = inflow(cfg, samples(cfg), inflow_rng);
+    run(cfg, &q_i, &rho_i, noise_rng)
+}
+
+/// Samples of a cycle of `t_end` seconds, the sample at 0 included.
+fn samples(cfg: &SimConfig) -> usize {
+    (cfg.t_end / cfg.t_s).floor() as usize + 1
+}
+
+/// The cycle driven by the inputs `q_i_all`, `ρ_i_all` (one per sample), measured with noise
+/// from `noise`.
+fn run<R: Rng + ?Sized>(
+    cfg: &SimConfig,
+    q_i_all: &[f64],
+    rho_i_all: &[f64],
+    noise: &mut R,
+) -> Result<Cycle> {
     let p = &cfg.hopper;
-    let n = (cfg.t_end / cfg.t_s).floor() as usize + 1;
-    let (q_i_all, rho_i_all) = inflow(cfg, n, &mut stream_rng(seed, 0));
-    let mut noise = stream_rng(seed, 1);
+    let n = q_i_all.len().min(rho_i_all.len());
 
     let mut c = Cycle {
         t: Vec::with_capacity(n),
@@ -452,8 +485,8 @@ pub fn simulate(cfg: &SimConfig, seed: u64) -> Result<Cycle> {
         } else {
             1
         };
-        let e_v: f64 = StandardNormal.sample(&mut noise);
-        let e_m: f64 = StandardNormal.sample(&mut noise);
+        let e_v: f64 = StandardNormal.sample(noise);
+        let e_m: f64 = StandardNormal.sample(noise);
         c.t.push(k as f64 * cfg.t_s);
         c.v_t.push(v_k);
         c.m_t.push(m_k);

@@ -6,16 +6,21 @@ use pf_core::kalman::{KalmanState, LinearGaussian};
 use pf_core::mc::stream_rng;
 use pf_dredge::direct::{DirectConfig, direct_computation};
 use pf_dredge::estimator::{
-    EstimateConfig, EstimatorConfig, OnlineEstimator, estimate, run_filter,
+    EstimateConfig, EstimatorConfig, OnlineEstimator, OnlineMean, estimate, run_filter,
 };
 use pf_dredge::experiments::{Fig8Config, NSweepConfig, Scale, fig8, n_sweep};
-use pf_dredge::simulator::{Cycle, SimConfig, simulate};
+use pf_dredge::simulator::{Cycle, SimConfig, simulate, simulate_streams};
 use pf_dredge::{DredgeData, DredgeError};
 use std::sync::OnceLock;
 
+/// The cycle of `cfg` under `seed`, on the experiments' streams `(seed, 0)` and `(seed, 1)`.
+fn seeded(cfg: &SimConfig, seed: u64) -> pf_dredge::Result<Cycle> {
+    simulate_streams(cfg, &mut stream_rng(seed, 0), &mut stream_rng(seed, 1))
+}
+
 fn cycle() -> &'static Cycle {
     static C: OnceLock<Cycle> = OnceLock::new();
-    C.get_or_init(|| simulate(&SimConfig::default(), 1).unwrap())
+    C.get_or_init(|| seeded(&SimConfig::default(), 1).unwrap())
 }
 
 #[test]
@@ -24,9 +29,22 @@ fn simulator_is_deterministic_in_config_and_seed() {
         t_end: 600.0,
         ..SimConfig::default()
     };
-    let a = simulate(&cfg, 3).unwrap();
-    assert_eq!(a, simulate(&cfg, 3).unwrap());
-    assert_ne!(a.y_v, simulate(&cfg, 4).unwrap().y_v);
+    let a = seeded(&cfg, 3).unwrap();
+    assert_eq!(a, seeded(&cfg, 3).unwrap());
+    assert_ne!(a.y_v, seeded(&cfg, 4).unwrap().y_v);
+    // One generator: the same numbers from the same stream, others from another.
+    let one = simulate(&cfg, &mut stream_rng(3, 0)).unwrap();
+    assert_eq!(one, simulate(&cfg, &mut stream_rng(3, 0)).unwrap());
+    assert_ne!(one.y_v, simulate(&cfg, &mut stream_rng(3, 1)).unwrap().y_v);
+    // The inputs come first from the one generator, so it shares the true cycle with the
+    // two-stream run whose inputs use the same stream, and only the noise differs.
+    assert_eq!((&one.q_i, &one.rho_i, &one.v_t), (&a.q_i, &a.rho_i, &a.v_t));
+    assert_ne!(one.y_v, a.y_v);
+    // The experiments' cycle is the two-stream one.
+    let exp =
+        pf_dredge::experiments::cycle(&pf_dredge::experiments::CycleConfig { sim: cfg, seed: 3 })
+            .unwrap();
+    assert_eq!(exp, a);
 }
 
 /// Volume and mass balances (1)–(2) over each sampling period: the state change equals the
@@ -223,7 +241,7 @@ fn resampling_happens_exactly_when_ess_falls_below_n_t() {
         t_end: 1500.0,
         ..SimConfig::default()
     };
-    let data = simulate(&sim, 2).unwrap().to_data();
+    let data = seeded(&sim, 2).unwrap().to_data();
     let cfg = EstimatorConfig::default().with_particles(200);
     let e = run_filter(&data, &cfg, &mut stream_rng(2, 0))
         .unwrap()
@@ -246,7 +264,7 @@ fn online_mode_matches_file_mode_bit_for_bit() {
         t_end: 1500.0,
         ..SimConfig::default()
     };
-    let mut data = simulate(&sim, 5).unwrap().to_data();
+    let mut data = seeded(&sim, 5).unwrap().to_data();
     // Gaps: a missing volume, a missing mass, both missing, and a missing input.
     data.v_t[10] = None;
     data.m_t[20] = None;
@@ -266,8 +284,43 @@ fn online_mode_matches_file_mode_bit_for_bit() {
     }
 }
 
+/// The on-line mean of several runs is the file mode's mean, bit for bit.
+#[test]
+fn the_online_mean_of_runs_matches_the_file_mode() {
+    let data = seeded(
+        &SimConfig {
+            t_end: 600.0,
+            ..SimConfig::default()
+        },
+        4,
+    )
+    .unwrap()
+    .to_data();
+    let cfg = EstimateConfig {
+        filter: EstimatorConfig::default().with_particles(100),
+        runs: 3,
+        seed: 11,
+        ..EstimateConfig::default()
+    };
+    let file = estimate(&data, &cfg).unwrap();
+    let mut online = OnlineMean::new(&cfg).unwrap();
+    for k in 0..data.len() {
+        let est = online.push(&data.sample(k)).unwrap();
+        assert_eq!(
+            (est.q_o, est.rho_o),
+            (file.q_o[k], file.rho_o[k]),
+            "sample {k}"
+        );
+    }
+    let none = EstimateConfig { runs: 0, ..cfg };
+    assert!(matches!(
+        OnlineMean::new(&none),
+        Err(DredgeError::InvalidParameter { name: "runs", .. })
+    ));
+}
+
 fn small_data() -> DredgeData {
-    simulate(
+    seeded(
         &SimConfig {
             t_end: 100.0,
             ..SimConfig::default()
@@ -301,7 +354,7 @@ fn bad_inputs_get_their_errors() {
     ] {
         assert!(
             matches!(
-                simulate(&sim, 7),
+                seeded(&sim, 7),
                 Err(DredgeError::InvalidParameter { name: n, .. }) if n == name
             ),
             "{name}"

@@ -7,7 +7,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(name) => name.parse()?,
         None => Scale::Quick,
     };
-    let cfg = TableConfig::at(scale);
+    let cfg = TableConfig::at_scale(scale);
     for (title, rep) in [("Table II", table2(&cfg)?), ("Table III", table3(&cfg)?)] {
         println!(
             "{title} (target {:.4}), paper's values in brackets:",
@@ -17,7 +17,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             println!("  {}", ours.against(paper));
         }
     }
-    let f = fig3(&Fig3Config::at(scale))?;
+    let f = fig3(&Fig3Config::at_scale(scale))?;
     println!("Fig. 3: {:?}", f.calibration);
     for r in &f.rows {
         println!(

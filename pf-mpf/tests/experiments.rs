@@ -4,7 +4,7 @@ use pf_mpf::experiments::{Fig3Config, Scale, TableConfig, fig3, table2, table3};
 
 #[test]
 fn tables_run_and_have_the_cli_shape() {
-    let cfg = TableConfig::at(Scale::Quick);
+    let cfg = TableConfig::at_scale(Scale::Quick);
     let t2 = table2(&cfg).unwrap();
     assert_eq!(t2.table.partitions.len(), 4);
     assert_eq!(t2.table.partitions[0].n, cfg.n_pf);
@@ -33,7 +33,7 @@ fn tables_run_and_have_the_cli_shape() {
 
 #[test]
 fn fig3_reports_a_finite_prediction_error() {
-    let mut cfg = Fig3Config::at(Scale::Quick);
+    let mut cfg = Fig3Config::at_scale(Scale::Quick);
     cfg.n_particles = 100;
     cfg.reps = 1;
     cfg.radar.n_steps = 10;

@@ -9,7 +9,7 @@ use pf_core::models::NoisyAr1;
 use pf_core::testing::joint_gaussian_posterior;
 use pf_smooth::ar1::{Ar1Data, Theta};
 use pf_smooth::exact::exact_statistics;
-use pf_smooth::experiments::{EmExperiment as EmArgs, ScoreExperiment as ScoreArgs, em, score};
+use pf_smooth::experiments::{EmConfig, Observations, ScoreConfig, em, score};
 
 fn simulated(n: usize, seed: u64) -> Vec<f64> {
     NoisyAr1::new(0.98, 0.2, 1.0)
@@ -18,8 +18,15 @@ fn simulated(n: usize, seed: u64) -> Vec<f64> {
         .1
 }
 
-fn args(particles: usize, replications: usize, lag: Option<usize>, seed: u64) -> EmArgs {
-    EmArgs {
+fn args(
+    y: &[f64],
+    particles: usize,
+    replications: usize,
+    lag: Option<usize>,
+    seed: u64,
+) -> EmConfig {
+    EmConfig {
+        data: Observations::Given(y.to_vec()),
         phi: 0.8,
         sigma: 0.5,
         rho: 2.0,
@@ -78,8 +85,8 @@ fn exact_statistics_match_the_brute_force_joint_posterior() {
 #[test]
 fn particle_updates_converge_to_the_exact_update_as_n_grows() {
     let y = simulated(100, 3);
-    let small = em(&y, &args(50, 16, Some(10), 5)).unwrap();
-    let large = em(&y, &args(800, 16, Some(10), 5)).unwrap();
+    let small = em(&args(&y, 50, 16, Some(10), 5)).unwrap();
+    let large = em(&args(&y, 800, 16, Some(10), 5)).unwrap();
     let exact = small.exact;
     // 16× the particles: the Monte Carlo error should shrink about 4-fold (bias and
     // variance both fall with N); ask for at least 2-fold, for every parameter.
@@ -116,7 +123,7 @@ fn particle_updates_converge_to_the_exact_update_as_n_grows() {
 #[test]
 fn fixed_lag_has_a_clearly_smaller_spread_than_the_joint_estimator_at_n_500() {
     let y = simulated(500, 4);
-    let out = em(&y, &args(100, 20, Some(20), 6)).unwrap();
+    let out = em(&args(&y, 100, 20, Some(20), 6)).unwrap();
     let (j, f) = (std(&out.joint.phi), std(&out.fixed_lag.unwrap().phi));
     // The paper: fixed lag at N = 100 is about the joint at N = 1000, a √10 ≈ 3.2 ratio in
     // spread; with 20 replications each std is known to about ±16 %, so 1.5 is safe.
@@ -126,17 +133,15 @@ fn fixed_lag_has_a_clearly_smaller_spread_than_the_joint_estimator_at_n_500() {
 #[test]
 fn the_fisher_identity_score_agrees_with_the_exact_gradient() {
     let y = simulated(50, 7);
-    let out = score(
-        &y,
-        &ScoreArgs {
-            phi: 0.8,
-            sigma: 0.5,
-            rho: 2.0,
-            particles: 2000,
-            replications: 16,
-            seed: 8,
-        },
-    )
+    let out = score(&ScoreConfig {
+        data: Observations::Given(y),
+        phi: 0.8,
+        sigma: 0.5,
+        rho: 2.0,
+        particles: 2000,
+        replications: 16,
+        seed: 8,
+    })
     .unwrap();
     for (name, xs, exact) in [
         ("phi", &out.particle.phi, out.exact.phi),
@@ -203,4 +208,24 @@ fn without_resampling_the_joint_estimator_is_the_importance_sampling_formula() {
             j + 1
         );
     }
+}
+
+/// Simulated observations are the model's draw on the stream `(seed, stream)`: the same
+/// numbers as given ones, and so the same experiment.
+#[test]
+fn simulated_observations_are_the_stream_s_draw() {
+    let given = args(&simulated(40, 3), 20, 2, Some(5), 1);
+    let drawn = EmConfig {
+        data: Observations::Simulated {
+            truth: Theta::paper_truth(),
+            n: 40,
+            seed: 3,
+            stream: 0,
+        },
+        ..given.clone()
+    };
+    let (states, data) = drawn.data.draw().unwrap();
+    assert_eq!(states.map(|x| x.len()), Some(41));
+    assert_eq!(data.y(), simulated(40, 3).as_slice());
+    assert_eq!(em(&drawn).unwrap(), em(&given).unwrap());
 }

@@ -3,7 +3,7 @@
 use super::{Scale, filter_seed, phase3};
 use crate::error::Result;
 use crate::estimator::{EstimatorConfig, residuals_of, run_filter};
-use crate::simulator::{SimConfig, simulate};
+use crate::simulator::SimConfig;
 use pf_core::mc::stream_rng;
 use pf_core::metrics::{Histogram, ResidualSummary};
 use serde::{Deserialize, Serialize};
@@ -115,7 +115,7 @@ fn report(truth: &[f64], r: &[f64], paper: PaperResiduals) -> Result<ResidualRep
 /// # Errors
 /// Invalid settings, a cycle that never reaches phase 3, or a failed filter step.
 pub fn fig5_6(cfg: &Fig56Config) -> Result<Fig56Result> {
-    let c = simulate(&cfg.sim, cfg.seed)?;
+    let c = super::cycle::simulated(&cfg.sim, cfg.seed)?;
     let p3 = phase3(&c)?;
     let run = run_filter(
         &c.to_data(),

@@ -7,7 +7,7 @@ use super::{Scale, filter_seed, phase3};
 use crate::direct::{DirectConfig, direct_computation};
 use crate::error::Result;
 use crate::estimator::{EstimatorConfig, Residuals, run_filter, summarise};
-use crate::simulator::{SimConfig, simulate};
+use crate::simulator::SimConfig;
 use pf_core::mc::stream_rng;
 use serde::{Deserialize, Serialize};
 
@@ -77,7 +77,7 @@ pub struct Fig7Result {
 /// # Errors
 /// Invalid settings, no phase 3, or a failed filter step.
 pub fn fig7(cfg: &Fig7Config) -> Result<Fig7Result> {
-    let c = simulate(&cfg.sim, cfg.seed)?;
+    let c = super::cycle::simulated(&cfg.sim, cfg.seed)?;
     let p3 = phase3(&c)?;
     let data = c.to_data();
     let direct = direct_computation(&data, &cfg.direct)?;

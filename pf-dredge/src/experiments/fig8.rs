@@ -3,7 +3,7 @@
 use super::{Scale, filter_seed};
 use crate::error::{DredgeError, Result};
 use crate::estimator::{EstimatorConfig, run_filter};
-use crate::simulator::{SimConfig, simulate};
+use crate::simulator::SimConfig;
 use pf_core::mc::{Par, try_replicate};
 use serde::{Deserialize, Serialize};
 
@@ -101,7 +101,7 @@ pub fn fig8(cfg: &Fig8Config) -> Result<Fig8Result> {
             reason: "at least one run",
         });
     }
-    let c = simulate(&cfg.sim, cfg.seed)?;
+    let c = super::cycle::simulated(&cfg.sim, cfg.seed)?;
     let data = c.to_data();
     let runs = try_replicate(filter_seed(cfg.seed), cfg.runs, Par::Rayon, |_, rng| {
         run_filter(&data, &cfg.filter, rng)

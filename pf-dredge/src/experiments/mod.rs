@@ -1,6 +1,8 @@
 //! One plain function per figure of Section V (and one beyond the paper): config struct in,
-//! result struct of raw numbers out. Each is deterministic for its seed: the cycle is
-//! simulated from `seed`, and filter run `r` uses [`pf_core::mc::stream_rng`]`(seed + 1, r)`.
+//! result struct of raw numbers out, `XConfig::at_scale` giving the preset of a [`Scale`].
+//! Each is deterministic for its seed: the cycle's inputs and measurement noise use the
+//! streams `(seed, 0)` and `(seed, 1)`, filter run `r` the stream `(seed + 0x5eedf117, r)`
+//! ([`pf_core::mc::stream_rng`]).
 //!
 //! | function | paper |
 //! |---|---|
@@ -9,17 +11,20 @@
 //! | [`fig7()`] | Fig. 7: PF against the direct computation (15)–(16) |
 //! | [`fig8()`] | Fig. 8: min–max band and mean of 25 runs on the same data |
 //! | [`n_sweep()`] | beyond the paper: residual std against `N` |
+//! | [`best_lag()`], [`flat_stretch()`] | Fig. 5's `ρ_o`: the estimate's delay, and its residual on the flat start |
 
 mod cycle;
 mod fig5_6;
 mod fig7;
 mod fig8;
+mod lag;
 mod n_sweep;
 
 pub use cycle::{CycleConfig, cycle};
 pub use fig5_6::{Fig56Config, Fig56Result, PaperResiduals, ResidualReport, fig5_6};
 pub use fig7::{Fig7Config, Fig7Result, fig7};
 pub use fig8::{Band, Fig8Config, Fig8Result, fig8};
+pub use lag::{FLAT_WINDOW, FlatStretch, NOISE_FLOOR, best_lag, flat_stretch};
 pub use n_sweep::{NSweepConfig, NSweepResult, NSweepRow, n_sweep};
 /// Fig. 6's histograms are pf-core's (re-exported where they used to be defined).
 pub use pf_core::metrics::Histogram;

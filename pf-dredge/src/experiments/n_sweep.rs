@@ -5,7 +5,7 @@
 use super::{Scale, filter_seed, phase3};
 use crate::error::{DredgeError, Result};
 use crate::estimator::{EstimatorConfig, residuals_of, run_filter};
-use crate::simulator::{SimConfig, simulate};
+use crate::simulator::SimConfig;
 use pf_core::mc::{Par, mean_and_se, try_replicate};
 use pf_core::metrics::ResidualSummary;
 use serde::{Deserialize, Serialize};
@@ -85,7 +85,7 @@ pub fn n_sweep(cfg: &NSweepConfig) -> Result<NSweepResult> {
             reason: "at least one N and one run",
         });
     }
-    let c = simulate(&cfg.sim, cfg.seed)?;
+    let c = super::cycle::simulated(&cfg.sim, cfg.seed)?;
     let p3 = phase3(&c)?;
     let data = c.to_data();
     let truth = |v: &[f64]| v[p3.clone()].iter().copied().map(Some).collect::<Vec<_>>();

@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::Scale;
 use crate::error::{HomotopyError, Result};
 use crate::filters::ohf_tracker::OhfTracker;
 use crate::model::ScenarioConfig;
@@ -48,6 +49,11 @@ impl Default for EllipsesConfig {
 }
 
 impl EllipsesConfig {
+    /// The paper's settings at every scale: one realisation costs the same at each.
+    pub fn at_scale(_scale: Scale) -> Self {
+        Self::default()
+    }
+
     /// Check the settings.
     pub fn validate(&self) -> Result<()> {
         self.scenario.validate()?;

@@ -11,6 +11,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::Scale;
 use crate::error::{HomotopyError, Result};
 use crate::filters::ohf_tracker::OhfTracker;
 use crate::model::ScenarioConfig;
@@ -42,6 +43,16 @@ impl Default for InformationConfig {
             realisations: 40,
             seed: 3,
             curves: vec![[-30.0, 0.5], [30.0, 0.5], [-30.0, 1.0], [-30.0, 0.25]],
+        }
+    }
+}
+
+impl InformationConfig {
+    /// The default's 40 realisations at `Default` and `Full`, 4 at `Quick`.
+    pub fn at_scale(scale: Scale) -> Self {
+        Self {
+            realisations: if scale == Scale::Quick { 4 } else { 40 },
+            ..Self::default()
         }
     }
 }

@@ -28,13 +28,13 @@ pub struct Fig3Config {
 
 impl Default for Fig3Config {
     fn default() -> Self {
-        Self::at(Scale::Full)
+        Self::at_scale(Scale::Full)
     }
 }
 
 impl Fig3Config {
-    /// A preset.
-    pub fn at(scale: Scale) -> Self {
+    /// The preset of `scale`: `Full` is the paper's sizes.
+    pub fn at_scale(scale: Scale) -> Self {
         let (n, reps, steps, cal) = match scale {
             Scale::Quick => (300, 2, 20, CalibrateConfig::quick()),
             Scale::Default => (2000, 3, 50, CalibrateConfig::default()),

@@ -7,10 +7,15 @@
 //! | [`table2`] | Table II: constant time (and RMSE over time per partition) |
 //! | [`table3`] | Table III: constant velocity RMSE |
 //! | [`calibrate`](crate::calibrate::calibrate) | Section IV-A: `flop_ns`, `c1`, `c2`, `c3` |
+//! | [`traces()`] | one recorded run per partition, step by step (for recordings) |
+//!
+//! Each takes `&XConfig` (with `XConfig::at_scale` giving the preset of a
+//! [`Scale`]) and returns `Result<XResult>`; Tables II and III share [`TableConfig`].
 
 mod fig3;
 mod ratio;
 mod tables;
+mod traces;
 
 pub use fig3::{Fig3Config, Fig3Result, Fig3Row, fig3};
 pub use ratio::{RatioConfig, RatioCurve, RatioResult, ratio};
@@ -18,6 +23,7 @@ pub use tables::{
     RmseCurve, TableConfig, TableReport, TableResult, TableRow, paper_table2, paper_table3, table2,
     table3,
 };
+pub use traces::{TracesConfig, TracesResult, traces};
 
 /// The experiments' size presets, shared with the other paper crates.
 pub use pf_core::mc::Scale;

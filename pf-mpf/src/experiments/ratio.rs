@@ -1,5 +1,6 @@
 //! Figs. 1 and 2: how many more particles the MPF can afford at the cost of the standard PF.
 
+use super::Scale;
 use crate::complexity::{CtCase, EfCoefficients, particle_ratio};
 use crate::error::{MpfError, Result};
 use serde::{Deserialize, Serialize};
@@ -33,6 +34,11 @@ impl Default for RatioConfig {
 }
 
 impl RatioConfig {
+    /// The paper's curves at every scale: they are closed-form, so the scale changes nothing.
+    pub fn at_scale(_scale: Scale) -> Self {
+        Self::default()
+    }
+
     /// Check the ranges.
     ///
     /// # Errors

@@ -35,13 +35,13 @@ pub struct TableConfig {
 
 impl Default for TableConfig {
     fn default() -> Self {
-        Self::at(Scale::Full)
+        Self::at_scale(Scale::Full)
     }
 }
 
 impl TableConfig {
     /// A preset: `Full` is the paper's sizes.
-    pub fn at(scale: Scale) -> Self {
+    pub fn at_scale(scale: Scale) -> Self {
         let (n_pf, n_mc, reps, steps) = match scale {
             Scale::Quick => (150, 4, 1, 20),
             Scale::Default => (1000, 16, 3, 50),
@@ -138,6 +138,23 @@ impl TableRow {
 pub struct TableResult {
     /// One row per partition.
     pub partitions: Vec<TableRow>,
+}
+
+impl TableResult {
+    /// The standard PF (the first row) and full marginalization (`PPKKKK`), if both are
+    /// in the table.
+    pub fn pf_and_full(&self) -> Option<(&TableRow, &TableRow)> {
+        let pf = self.partitions.first()?;
+        let full = self.partitions.iter().find(|r| r.name == "PPKKKK")?;
+        Some((pf, full))
+    }
+
+    /// Whether full marginalization lowers both the position and the velocity RMSE of the
+    /// standard PF, as the paper reports at equal time (Table II); `None` without both rows.
+    pub fn full_marginalization_lowers_both(&self) -> Option<bool> {
+        self.pf_and_full()
+            .map(|(pf, full)| full.rmse_pos < pf.rmse_pos && full.rmse_vel < pf.rmse_vel)
+    }
 }
 
 /// RMSE over time of one partition (per-step RMSE over the Monte Carlo runs).

@@ -1,10 +1,21 @@
-//! The paper's experiments as functions from data and a serde configuration to a serde
-//! result: replicated EM updates (Figs. 2–3), SEM chains over exact EM (Fig. 4), the
-//! Fisher-identity score, and the lag sweep (not in the paper).
+//! The paper's experiments, each a function from a serde configuration to a serde result:
+//! replicated EM updates (Figs. 2–3), SEM chains over exact EM (Fig. 4), the
+//! Fisher-identity score, the lag sweep (not in the paper), Fig. 1's genealogy, and the
+//! whole of Section 5 at a [`Scale`] ([`smooth()`]).
 //!
-//! Each function takes the observations `Y_0…Y_n` and a configuration, validates both, and
-//! returns data whose JSON is the `pf-viz smooth em|sem|score` contract. Replication `r`
-//! (or chain `c`) uses the stream `(seed, r)`, so results do not depend on the thread count.
+//! Each configuration says where its observations come from ([`Observations`]: given, or
+//! simulated from Section 5's model on a stream of a seed). The function validates the
+//! configuration, then the data, and returns data whose JSON is the
+//! `pf-viz smooth em|sem|score` contract. Replication `r` (or chain `c`) uses the stream
+//! `(seed, r)`, so results do not depend on the thread count.
+
+mod paper;
+
+pub use paper::{
+    Fig1Config, Fig1Result, FixedLagClaim, ForwardReference, SmoothConfig, SmoothResult, Spread,
+    UpdateRuns, fig1, fixed_lag_claim, forward_reference, smooth, smooth_with_progress,
+};
+pub use pf_core::mc::Scale;
 
 use crate::ar1::{Ar1Data, Ar1Statistics, SuffStats, Theta, ThetaSamples};
 use crate::em::{
@@ -16,14 +27,76 @@ use crate::exact::{exact_em, exact_em_step, exact_statistics};
 use crate::fixed_lag::FixedLag;
 use crate::path_space::PathSpace;
 use pf_core::filter::ParticleFilter;
-use pf_core::mc::{Par, try_replicate};
+use pf_core::mc::{Par, stream_rng, try_replicate};
+use pf_core::models::NoisyAr1;
 use pf_core::observe::{Observer, StepView};
 use serde::{Deserialize, Serialize};
 
+/// Where an experiment's observations `Y_0…Y_n` come from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Observations {
+    /// Given values, at least `Y_0, Y_1`.
+    Given(Vec<f64>),
+    /// `n + 1` observations of Section 5's model at `truth`, `X_0` from its stationary law,
+    /// drawn from the stream `(seed, stream)`.
+    Simulated {
+        /// The data-generating θ.
+        truth: Theta,
+        /// The index of the last observation.
+        n: usize,
+        /// The seed.
+        seed: u64,
+        /// The stream under `seed`.
+        stream: u64,
+    },
+}
+
+impl Default for Observations {
+    /// [`Observations::paper`] under seed 0.
+    fn default() -> Self {
+        Observations::paper(0)
+    }
+}
+
+impl Observations {
+    /// Section 5's data: `n = 500` at φ = 0.98, σ = 0.2, ρ = 1, from stream 0 of `seed`.
+    pub fn paper(seed: u64) -> Self {
+        Observations::Simulated {
+            truth: Theta::paper_truth(),
+            n: 500,
+            seed,
+            stream: 0,
+        }
+    }
+
+    /// The hidden states `X_0…X_n` (simulated data only) and the checked observations.
+    ///
+    /// # Errors
+    /// Fewer than two or non-finite observations, or an invalid data-generating θ.
+    pub fn draw(&self) -> Result<(Option<Vec<f64>>, Ar1Data)> {
+        match self {
+            Observations::Given(y) => Ok((None, Ar1Data::from_slice(y)?)),
+            Observations::Simulated {
+                truth,
+                n,
+                seed,
+                stream,
+            } => {
+                let model = NoisyAr1::new(truth.phi, truth.sigma2.sqrt(), truth.rho2.sqrt())?;
+                let (xs, ys) = model.simulate(*n, &mut stream_rng(*seed, *stream));
+                Ok((Some(xs), Ar1Data::new(ys)?))
+            }
+        }
+    }
+}
+
 /// Arguments of `pf-viz smooth em`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct EmExperiment {
+pub struct EmConfig {
+    /// The observations.
+    pub data: Observations,
     /// Current φ.
     pub phi: f64,
     /// Current σ (standard deviation).
@@ -44,10 +117,12 @@ pub struct EmExperiment {
     pub seed: u64,
 }
 
-impl Default for EmExperiment {
-    /// The paper's Fig. 3 setting: θ = (0.8, 0.5², 2²), N = 100, δ = 20, 100 replications.
+impl Default for EmConfig {
+    /// The paper's Fig. 3 setting: θ = (0.8, 0.5², 2²), N = 100, δ = 20, 100 replications,
+    /// on Section 5's data.
     fn default() -> Self {
-        EmExperiment {
+        EmConfig {
+            data: Observations::default(),
             phi: 0.8,
             sigma: 0.5,
             rho: 2.0,
@@ -60,7 +135,7 @@ impl Default for EmExperiment {
     }
 }
 
-impl EmExperiment {
+impl EmConfig {
     /// Check σ, ρ > 0, φ finite, N, R ≥ 1, δ ≥ 1.
     ///
     /// # Errors
@@ -99,9 +174,9 @@ pub struct EmResult {
 /// # Errors
 /// Bad data or arguments, a filter failure, or a degenerate update (first failing
 /// replication).
-pub fn em(y: &[f64], cfg: &EmExperiment) -> Result<EmResult> {
+pub fn em(cfg: &EmConfig) -> Result<EmResult> {
     let theta = cfg.validate()?;
-    let data = Ar1Data::from_slice(y)?;
+    let (_, data) = cfg.data.draw()?;
     let exact = exact_em_step(&data, &theta)?;
     let filter = paper_filter_config(cfg.particles);
     let reps = try_replicate(cfg.seed, cfg.replications, Par::Rayon, |_, rng| {
@@ -129,9 +204,11 @@ pub fn em(y: &[f64], cfg: &EmExperiment) -> Result<EmResult> {
 }
 
 /// Arguments of `pf-viz smooth sem`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct SemExperiment {
+pub struct SemConfig {
+    /// The observations.
+    pub data: Observations,
     /// Starting φ.
     pub phi: f64,
     /// Starting σ.
@@ -148,10 +225,12 @@ pub struct SemExperiment {
     pub seed: u64,
 }
 
-impl Default for SemExperiment {
-    /// Fig. 4: N = 25, 50 iterations, 4 chains, from θ = (0.8, 0.5², 2²).
+impl Default for SemConfig {
+    /// Fig. 4: N = 25, 50 iterations, 4 chains, from θ = (0.8, 0.5², 2²), on Section 5's
+    /// data.
     fn default() -> Self {
-        SemExperiment {
+        SemConfig {
+            data: Observations::default(),
             phi: 0.8,
             sigma: 0.5,
             rho: 2.0,
@@ -163,7 +242,7 @@ impl Default for SemExperiment {
     }
 }
 
-impl SemExperiment {
+impl SemConfig {
     /// Check σ, ρ > 0, φ finite, N, C ≥ 1, and C no more than a machine can hold.
     ///
     /// # Errors
@@ -197,9 +276,9 @@ pub struct SemResult {
 ///
 /// # Errors
 /// Bad data or arguments, or the first failing chain (with its iteration).
-pub fn sem(y: &[f64], cfg: &SemExperiment) -> Result<SemResult> {
+pub fn sem(cfg: &SemConfig) -> Result<SemResult> {
     let theta = cfg.validate()?;
-    let data = Ar1Data::from_slice(y)?;
+    let (_, data) = cfg.data.draw()?;
     let exact = exact_em(&data, &theta, cfg.iterations)?;
     let algo = StochasticEm {
         particles: ParticleSchedule::Fixed(cfg.particles),
@@ -213,9 +292,11 @@ pub fn sem(y: &[f64], cfg: &SemExperiment) -> Result<SemResult> {
 }
 
 /// Arguments of `pf-viz smooth score`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ScoreExperiment {
+pub struct ScoreConfig {
+    /// The observations.
+    pub data: Observations,
     /// φ at which to evaluate the score.
     pub phi: f64,
     /// σ.
@@ -230,10 +311,11 @@ pub struct ScoreExperiment {
     pub seed: u64,
 }
 
-impl Default for ScoreExperiment {
-    /// The current estimate of Figs. 2–3, N = 100, 100 replications.
+impl Default for ScoreConfig {
+    /// The current estimate of Figs. 2–3, N = 100, 100 replications, on Section 5's data.
     fn default() -> Self {
-        ScoreExperiment {
+        ScoreConfig {
+            data: Observations::default(),
             phi: 0.8,
             sigma: 0.5,
             rho: 2.0,
@@ -244,7 +326,7 @@ impl Default for ScoreExperiment {
     }
 }
 
-impl ScoreExperiment {
+impl ScoreConfig {
     /// Check σ, ρ > 0, φ finite, N, R ≥ 1.
     ///
     /// # Errors
@@ -272,9 +354,9 @@ pub struct ScoreResult {
 ///
 /// # Errors
 /// Bad data or arguments, or a filter failure.
-pub fn score(y: &[f64], cfg: &ScoreExperiment) -> Result<ScoreResult> {
+pub fn score(cfg: &ScoreConfig) -> Result<ScoreResult> {
     let theta = cfg.validate()?;
-    let data = Ar1Data::from_slice(y)?;
+    let (_, data) = cfg.data.draw()?;
     let exact = exact_statistics(&data, &theta)?.score(&theta);
     let filter = paper_filter_config(cfg.particles);
     let reps = try_replicate(cfg.seed, cfg.replications, Par::Rayon, |_, rng| {
@@ -294,7 +376,9 @@ pub fn score(y: &[f64], cfg: &ScoreExperiment) -> Result<ScoreResult> {
 /// all from the same particle runs, against the exact update.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct LagSweep {
+pub struct LagSweepConfig {
+    /// The observations.
+    pub data: Observations,
     /// Current φ.
     pub phi: f64,
     /// Current σ.
@@ -309,6 +393,23 @@ pub struct LagSweep {
     pub lags: Vec<usize>,
     /// Seed; replication r uses stream (seed, r).
     pub seed: u64,
+}
+
+impl LagSweepConfig {
+    /// Check σ, ρ > 0, φ finite, N, R ≥ 1, at least one lag, every lag ≥ 1.
+    ///
+    /// # Errors
+    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
+    pub fn validate(&self) -> Result<Theta> {
+        let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
+        at_least_one("particles", self.particles)?;
+        at_least_one("replications", self.replications)?;
+        at_least_one("number of lags", self.lags.len())?;
+        for &d in &self.lags {
+            at_least_one("lag", d)?;
+        }
+        Ok(theta)
+    }
 }
 
 /// Output of [`lag_sweep`]: per lag, the updates over the replications.
@@ -341,15 +442,9 @@ impl Observer<f64> for Lags<'_> {
 ///
 /// # Errors
 /// Bad data or configuration (a lag of 0, no lags), a filter failure or a degenerate update.
-pub fn lag_sweep(y: &[f64], cfg: &LagSweep) -> Result<LagSweepResult> {
-    let theta = Theta::from_std(cfg.phi, cfg.sigma, cfg.rho)?;
-    at_least_one("particles", cfg.particles)?;
-    at_least_one("replications", cfg.replications)?;
-    at_least_one("number of lags", cfg.lags.len())?;
-    for &d in &cfg.lags {
-        at_least_one("lag", d)?;
-    }
-    let data = Ar1Data::from_slice(y)?;
+pub fn lag_sweep(cfg: &LagSweepConfig) -> Result<LagSweepResult> {
+    let theta = cfg.validate()?;
+    let (_, data) = cfg.data.draw()?;
     let n = data.n();
     let exact = exact_em_step(&data, &theta)?;
     let filter = paper_filter_config(cfg.particles);
@@ -400,7 +495,8 @@ mod tests {
             counts.push(pf_core::limits::MAX_COUNT);
         }
         for chains in counts {
-            let cfg = SemExperiment {
+            let cfg = SemConfig {
+                data: Observations::Given(vec![0.1, 0.2, 0.3]),
                 phi: 0.9,
                 sigma: 0.5,
                 rho: 1.0,
@@ -409,7 +505,7 @@ mod tests {
                 chains,
                 seed: 1,
             };
-            let e = sem(&[0.1, 0.2, 0.3], &cfg).unwrap_err().to_string();
+            let e = sem(&cfg).unwrap_err().to_string();
             assert!(e.contains("SEM chains"), "{chains}: {e}");
         }
     }

@@ -14,12 +14,9 @@ use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
-use pf_core::mc::stream_rng;
+use pf_dredge::experiments::{CycleConfig, cycle};
 use pf_dredge::logfile::{CsvSamples, read_csv, write_csv};
-use pf_dredge::{
-    DredgeError, EstimateConfig, EstimatorConfig, OnlineEstimate, OnlineEstimator, SimConfig,
-    estimate, simulate,
-};
+use pf_dredge::{DredgeError, EstimateConfig, EstimatorConfig, OnlineMean, estimate};
 
 use crate::cmd::print_line;
 use crate::error::{Result, VizError};
@@ -93,7 +90,11 @@ fn data_err(path: &Path) -> impl Fn(DredgeError) -> VizError + '_ {
 }
 
 fn run_simulate(a: &SimulateArgs) -> Result<()> {
-    let cycle = simulate(&SimConfig::default(), a.seed).map_err(VizError::paper("dredge"))?;
+    let cycle = cycle(&CycleConfig {
+        seed: a.seed,
+        ..CycleConfig::default()
+    })
+    .map_err(VizError::paper("dredge"))?;
     let data = cycle.to_data();
     crate::io::write_atomic(&a.out, |w| {
         write_csv(&data, w).map_err(|e| VizError::Io {
@@ -182,38 +183,20 @@ fn run_estimate(a: &EstimateArgs) -> Result<()> {
     Ok(())
 }
 
-/// One estimator per run (run `r` on `stream_rng(seed, r)`, as the file mode), each sample
-/// pushed through all of them and their mean printed and flushed at once. The mean is
-/// accumulated in the file mode's order, so the two modes print the same numbers.
+/// One estimator per run (run `r` on the stream `(seed, r)`, as the file mode), each sample
+/// pushed through all of them and their mean printed and flushed at once: the same numbers
+/// as the file mode ([`OnlineMean`]).
 fn run_online(input: Box<dyn BufRead>, shown: &Path, cfg: &EstimateConfig) -> Result<()> {
     let err = data_err(shown);
     let mut rows = CsvSamples::new(input).map_err(&err)?;
-    let mut filters = (0..cfg.runs)
-        .map(|r| {
-            Ok((
-                OnlineEstimator::new(&cfg.filter)?,
-                stream_rng(cfg.seed, r as u64),
-            ))
-        })
-        .collect::<std::result::Result<Vec<_>, DredgeError>>()
-        .map_err(&err)?;
-    let r = cfg.runs as f64;
+    let mut mean = OnlineMean::new(cfg).map_err(&err)?;
     for row in &mut rows {
         let row = row.map_err(&err)?;
-        let mut est = OnlineEstimate {
-            t: row.sample.t,
-            q_o: 0.0,
-            rho_o: 0.0,
-        };
-        for (f, rng) in &mut filters {
-            let e = f.push(&row.sample, rng).map_err(|e| VizError::Data {
-                path: shown.to_owned(),
-                line: Some(row.line),
-                message: e.to_string(),
-            })?;
-            est.q_o += e.q_o / r;
-            est.rho_o += e.rho_o / r;
-        }
+        let est = mean.push(&row.sample).map_err(|e| VizError::Data {
+            path: shown.to_owned(),
+            line: Some(row.line),
+            message: e.to_string(),
+        })?;
         let line = serde_json::to_string(&est).map_err(|e| VizError::Argument {
             message: format!("cannot serialise the estimate: {e}"),
         })?;

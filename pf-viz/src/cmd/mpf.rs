@@ -200,7 +200,7 @@ fn table(
     run: fn(&TableConfig) -> pf_mpf::Result<TableReport>,
     which: &str,
 ) -> Result<()> {
-    let mut cfg = TableConfig::at(a.scale);
+    let mut cfg = TableConfig::at_scale(a.scale);
     cfg.seed = a.seed;
     if let Some(mc) = a.mc {
         if mc == 0 {

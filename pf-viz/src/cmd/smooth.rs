@@ -12,7 +12,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
-use pf_smooth::experiments::{EmExperiment, ScoreExperiment, SemExperiment, em, score, sem};
+use pf_smooth::experiments::{EmConfig, Observations, ScoreConfig, SemConfig, em, score, sem};
 use pf_smooth::{SmoothError, Theta, ThetaSamples};
 
 use super::{print_json, print_line};
@@ -124,7 +124,8 @@ pub fn run(cmd: SmoothCommand) -> Result<()> {
     match cmd {
         SmoothCommand::Em(a) => {
             let c = &a.common;
-            let cfg = EmExperiment {
+            let mut cfg = EmConfig {
+                data: Observations::Given(Vec::new()),
                 phi: c.phi,
                 sigma: c.sigma,
                 rho: c.rho,
@@ -135,8 +136,8 @@ pub fn run(cmd: SmoothCommand) -> Result<()> {
                 seed: c.seed,
             };
             cfg.validate().map_err(wrap)?;
-            let y = read(&c.data)?;
-            let out = em(&y, &cfg).map_err(wrap)?;
+            cfg.data = Observations::Given(read(&c.data)?);
+            let out = em(&cfg).map_err(wrap)?;
             if c.json {
                 return print_json(&out);
             }
@@ -156,7 +157,8 @@ pub fn run(cmd: SmoothCommand) -> Result<()> {
         }
         SmoothCommand::Sem(a) => {
             let c = &a.common;
-            let cfg = SemExperiment {
+            let mut cfg = SemConfig {
+                data: Observations::Given(Vec::new()),
                 phi: c.phi,
                 sigma: c.sigma,
                 rho: c.rho,
@@ -166,8 +168,8 @@ pub fn run(cmd: SmoothCommand) -> Result<()> {
                 seed: c.seed,
             };
             cfg.validate().map_err(wrap)?;
-            let y = read(&c.data)?;
-            let out = sem(&y, &cfg).map_err(wrap)?;
+            cfg.data = Observations::Given(read(&c.data)?);
+            let out = sem(&cfg).map_err(wrap)?;
             if c.json {
                 return print_json(&out);
             }
@@ -187,7 +189,8 @@ pub fn run(cmd: SmoothCommand) -> Result<()> {
         }
         SmoothCommand::Score(a) => {
             let c = &a.common;
-            let cfg = ScoreExperiment {
+            let mut cfg = ScoreConfig {
+                data: Observations::Given(Vec::new()),
                 phi: c.phi,
                 sigma: c.sigma,
                 rho: c.rho,
@@ -196,8 +199,8 @@ pub fn run(cmd: SmoothCommand) -> Result<()> {
                 seed: c.seed,
             };
             cfg.validate().map_err(wrap)?;
-            let y = read(&c.data)?;
-            let out = score(&y, &cfg).map_err(wrap)?;
+            cfg.data = Observations::Given(read(&c.data)?);
+            let out = score(&cfg).map_err(wrap)?;
             if c.json {
                 return print_json(&out);
             }

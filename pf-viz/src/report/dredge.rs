@@ -6,15 +6,14 @@
 
 use serde::Serialize;
 
-use super::sd;
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
 use crate::png::histogram::{self, HistData, HistPanel, HistStats, HistogramPlot};
 use crate::png::line::{self, Band, LinePlot, Series};
 use crate::png::style::{AxisScale, LegendPos};
 use pf_dredge::experiments::{
-    self as ex, CycleConfig, Fig7Config, Fig7Result, Fig8Config, Fig8Result, Fig56Config,
-    Fig56Result, NSweepConfig, NSweepResult,
+    self as ex, CycleConfig, FLAT_WINDOW, Fig7Config, Fig7Result, Fig8Config, Fig8Result,
+    Fig56Config, Fig56Result, FlatStretch, NOISE_FLOOR, NSweepConfig, NSweepResult,
 };
 use pf_dredge::simulator::Cycle;
 
@@ -94,69 +93,37 @@ fn plot(title: &str, y_label: &str, series: Vec<Series>, legend: LegendPos) -> L
     }
 }
 
-/// Samples per window of [`flat_stretch`]'s local spread (150 s).
-const WINDOW: usize = 30;
-
-/// The ρₒ residual std that the measurement noise alone leaves in the linearised filter
-/// with the paper's noise levels (crate README), kg/m³.
-const NOISE_FLOOR: f64 = 7.2;
-
-/// Point (2) of the ρₒ note: the residual where the simulated ρₒ has not yet left the water
-/// density it starts phase 3 at, measured on the run itself, against [`NOISE_FLOOR`].
-fn flat_stretch(t: &[f64], truth: &[f64], hat: &[f64]) -> String {
-    let len = t.len().min(truth.len()).min(hat.len());
-    let Some(&start) = truth.first() else {
-        return "(2) phase 3 is empty in this run".into();
-    };
-    let n = truth[..len]
-        .iter()
-        .take_while(|&&r| (r - start).abs() < 1.0)
-        .count();
-    if n < 2 * WINDOW {
-        return format!(
+/// Point (2) of the ρₒ note: [`FlatStretch`] in words.
+fn flat_stretch_note(f: FlatStretch) -> String {
+    match f {
+        FlatStretch::Empty => "(2) phase 3 is empty in this run".into(),
+        FlatStretch::TooShort { start, samples } => format!(
             "(2) the noise floor cannot be measured on this run: the simulated ρₒ leaves \
-             {start:.0} kg/m³ within {n} samples of phase 3"
-        );
+             {start:.0} kg/m³ within {samples} samples of phase 3"
+        ),
+        FlatStretch::Measured {
+            start,
+            from,
+            to,
+            share,
+            std,
+            window_range: [lo, hi],
+            at_noise_floor,
+        } => {
+            let (lead, verdict) = if at_noise_floor {
+                ("not the noise", "of the order of")
+            } else {
+                ("the noise floor", "above")
+            };
+            format!(
+                "(2) {lead}: while our simulated ρₒ stays at {start:.0} kg/m³ ({from:.0}–{to:.0} \
+                 s, {:.0} % of phase 3) the residual std is {std:.1} kg/m³, and {lo:.1}–{hi:.1} \
+                 over {FLAT_WINDOW}-sample windows, {verdict} the {NOISE_FLOOR} kg/m³ that the \
+                 measurement noise alone leaves in the linearised filter",
+                100.0 * share,
+            )
+        }
     }
-    let resid: Vec<f64> = truth[..n].iter().zip(hat).map(|(a, b)| b - a).collect();
-    let windows: Vec<f64> = resid.chunks_exact(WINDOW).map(sd).collect();
-    let (lo, hi) = windows
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &w| {
-            (l.min(w), h.max(w))
-        });
-    let std = sd(&resid);
-    let (lead, verdict) = if std <= 2.0 * NOISE_FLOOR {
-        ("not the noise", "of the order of")
-    } else {
-        ("the noise floor", "above")
-    };
-    format!(
-        "(2) {lead}: while our simulated ρₒ stays at {start:.0} kg/m³ ({:.0}–{:.0} s, {:.0} % \
-         of phase 3) the residual std is {std:.1} kg/m³, and {lo:.1}–{hi:.1} over \
-         {WINDOW}-sample windows, {verdict} the {NOISE_FLOOR} kg/m³ that the measurement \
-         noise alone leaves in the linearised filter",
-        t[0],
-        t[n - 1],
-        100.0 * n as f64 / truth.len() as f64,
-    )
-}
-
-/// The delay (s) by which `estimate` best follows `truth`: the shift, up to a fifth of the
-/// record, that minimises their mean squared difference.
-fn best_lag(t: &[f64], truth: &[f64], estimate: &[f64]) -> f64 {
-    let n = truth.len().min(estimate.len()).min(t.len());
-    let mse = |s: usize| {
-        let d = truth[..n - s]
-            .iter()
-            .zip(&estimate[s..n])
-            .map(|(a, b)| (a - b).powi(2));
-        d.sum::<f64>() / (n - s) as f64
-    };
-    let best = (0..n / 5)
-        .min_by(|&a, &b| mse(a).total_cmp(&mse(b)))
-        .unwrap_or(0);
-    if best == 0 { 0.0 } else { t[best] - t[0] }
 }
 
 /// The N sweep's ρₒ residual std (mean ± s.e. of its replications) at the figures' `n`
@@ -190,7 +157,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
 
     let cycle_config = CycleConfig {
         seed,
-        ..CycleConfig::default()
+        ..CycleConfig::at_scale(sc)
     };
     let c = ex::cycle(&cycle_config).map_err(err)?;
     bar.inc(1);
@@ -332,7 +299,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
              simulated ρₒ (see notes): shifting the estimate back by {:.0} s matches the two \
              best.",
             fig5_6_config.filter.n_particles,
-            best_lag(&f56.t, &f56.rho_o_true, &f56.rho_o_hat)
+            f56.rho_o_lag()
         ),
     );
 
@@ -579,8 +546,8 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             100.0 * r.relative_std,
             r.signal_range,
             sweep_rho_std(&ns, fig5_6_config.filter.n_particles),
-            flat_stretch(&f56.t, &f56.rho_o_true, &f56.rho_o_hat),
-            best_lag(&f56.t, &f56.rho_o_true, &f56.rho_o_hat),
+            flat_stretch_note(f56.rho_o_flat_stretch()),
+            f56.rho_o_lag(),
         ),
         "Values the paper leaves unstated, chosen physically plausible (crate README lists them \
          with units): hopper area A, k_o, k'_o, k_c, v_s, β, ρ_q, ρ_s, ρ_w, the inflow \
@@ -627,68 +594,4 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         files,
         timing_dependent: vec![],
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A ramp and the same ramp 7 samples late: the lag is 7 sample intervals.
-    #[test]
-    fn best_lag_finds_a_known_delay() {
-        let t: Vec<f64> = (0..200).map(|k| 5.0 * k as f64).collect();
-        let truth: Vec<f64> = (0..200).map(|k| (k as f64 / 10.0).sin()).collect();
-        let late: Vec<f64> = (0..200).map(|k| truth[k.max(7) - 7]).collect();
-        assert_eq!(best_lag(&t, &truth, &late), 35.0);
-        assert_eq!(best_lag(&t, &truth, &truth), 0.0);
-    }
-
-    /// The noise floor is measured on the flat start only: 60 flat samples with residuals
-    /// ±1 (std ≈ 1.008), then a ramp whose large residuals must not count.
-    #[test]
-    fn the_flat_stretch_is_measured_before_the_density_moves() {
-        let t: Vec<f64> = (0..100).map(|k| 5.0 * k as f64).collect();
-        let truth: Vec<f64> = (0..100)
-            .map(|k| {
-                if k < 60 {
-                    1025.0
-                } else {
-                    1025.0 + 10.0 * (k - 59) as f64
-                }
-            })
-            .collect();
-        let hat: Vec<f64> = (0..100)
-            .map(|k| {
-                if k < 60 {
-                    1025.0 + if k % 2 == 0 { 1.0 } else { -1.0 }
-                } else {
-                    1025.0
-                }
-            })
-            .collect();
-        let s = flat_stretch(&t, &truth, &hat);
-        assert!(s.starts_with("(2) not the noise: while"), "{s}");
-        assert!(
-            s.contains("stays at 1025 kg/m³ (0–295 s, 60 % of phase 3)"),
-            "{s}"
-        );
-        assert!(
-            s.contains("residual std is 1.0 kg/m³, and 1.0–1.0 over 30-sample"),
-            "{s}"
-        );
-        // Too short a flat start says so rather than measuring noise on a ramp.
-        let short = flat_stretch(&t[..40], &truth[20..60], &hat[..40]);
-        assert!(short.contains("cannot be measured"), "{short}");
-        // A floor far above the linearised filter's is not called "not the noise".
-        let noisy: Vec<f64> = hat
-            .iter()
-            .zip(&truth)
-            .map(|(h, r)| r + 30.0 * (h - r))
-            .collect();
-        let loud = flat_stretch(&t, &truth, &noisy);
-        assert!(
-            loud.starts_with("(2) the noise floor:") && loud.contains("above"),
-            "{loud}"
-        );
-    }
 }

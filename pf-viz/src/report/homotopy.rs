@@ -10,12 +10,9 @@
 
 use pf_core::gaussian::ErrorEllipse;
 use pf_homotopy::experiments::{
-    AblationConfig, AblationResult, Ellipse, EllipsesConfig, EllipsesResult, GeometryConfig,
-    GeometryResult, InformationConfig, InformationResult, PerAlgorithm, RmseConfig, RmseResult,
-    ScenarioGeometry, ablation, ellipses, geometry as geometry_sweep, information, rmse,
-    scenario_geometry,
+    Ellipse, EllipsesResult, GeometryConfig, GeometryResult, HomotopyConfig, InformationResult,
+    OhfAgainstAohf, PerAlgorithm, ScenarioGeometry, homotopy_with_progress, papers_ordering_holds,
 };
-use serde::Serialize;
 
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
@@ -23,7 +20,6 @@ use crate::png;
 use crate::png::line::{Band, LinePlot, RefLine, Series};
 use crate::png::style::{AxisScale, LegendPos};
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle};
-use pf_core::mc::{Scale, rms_and_se};
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
@@ -31,27 +27,6 @@ pub const SECTION: Section = Section {
     title: "Morelande et al.: the optimal homotopy filter for bearings-only tracking",
     run: run_section,
 };
-
-/// Every number behind the section.
-#[derive(Debug, Clone, Serialize)]
-pub struct HomotopyResult {
-    /// The master seed.
-    pub seed: u64,
-    /// Fig. 1.
-    pub scenario: ScenarioGeometry,
-    /// Fig. 2.
-    pub ellipses: EllipsesResult,
-    /// Fig. 3 configuration.
-    pub rmse_config: RmseConfig,
-    /// Fig. 3 and the cost.
-    pub rmse: RmseResult,
-    /// The ablations.
-    pub ablation: AblationResult,
-    /// Final errors against the unstated turn direction and σ.
-    pub geometry: GeometryResult,
-    /// Information per bearing for each turn direction and σ.
-    pub information: InformationResult,
-}
 
 fn to_ellipse(e: &pf_homotopy::experiments::Ellipse) -> ErrorEllipse {
     ErrorEllipse {
@@ -64,62 +39,24 @@ fn to_ellipse(e: &pf_homotopy::experiments::Ellipse) -> ErrorEllipse {
 fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     let homotopy = VizError::paper("homotopy");
     let seed = ctx.seed;
-    let sc = ctx.scale;
-    let bar = ctx.progress.bar("homotopy", 5);
-    let scenario = pf_homotopy::model::ScenarioConfig::default();
-    let geometry = scenario_geometry(&scenario).map_err(homotopy)?;
-    bar.set_message("Fig. 2: ellipses");
-    let ell = ellipses(&EllipsesConfig {
+    let cfg = HomotopyConfig {
         seed,
-        ..EllipsesConfig::default()
-    })
-    .map_err(homotopy)?;
-    bar.inc(1);
-    bar.set_message("Fig. 3: RMS error over realisations");
-    let mut rmse_cfg = RmseConfig {
-        seed,
-        ..RmseConfig::at_scale(sc)
-    };
-    let mut abl_cfg = AblationConfig {
-        seed,
-        ..AblationConfig::at_scale(sc)
-    };
-    let mut geo_cfg = GeometryConfig::at_scale(sc);
-    geo_cfg.base.seed = seed;
-    if ctx.scale == Scale::Quick {
-        // Seconds in the dev profile: a smoke test of the pipeline, not a result.
-        rmse_cfg.realisations = 3;
-        abl_cfg.realisations = 1;
-        abl_cfg.lambda_steps = vec![10, 40];
-        abl_cfg.grids = vec![[12, 6], [48, 24]];
-        geo_cfg.base.realisations = 1;
-        geo_cfg.base.filters.particles = 500;
-        geo_cfg.sigmas_deg = vec![1.0];
+        ..HomotopyConfig::at_scale(ctx.scale)
     }
-    let r = rmse(&rmse_cfg).map_err(homotopy)?;
-    bar.inc(1);
-    bar.set_message("ablations");
-    let abl = ablation(&abl_cfg).map_err(homotopy)?;
-    bar.inc(1);
-    bar.set_message("turn direction and σ");
-    let geo = geometry_sweep(&geo_cfg).map_err(homotopy)?;
-    bar.inc(1);
-    bar.set_message("information per bearing");
-    let mut info_cfg = InformationConfig {
-        seed,
-        ..InformationConfig::default()
-    };
-    if ctx.scale == Scale::Quick {
-        info_cfg.realisations = 4;
-    }
-    let info = information(&info_cfg).map_err(homotopy)?;
-    bar.inc(1);
+    .seeded();
+    let bar = ctx.progress.bar("homotopy", cfg.ticks());
+    let result = homotopy_with_progress(&cfg, &|| bar.inc(1)).map_err(homotopy)?;
     bar.finish_and_clear();
+    let scenario = &cfg.scenario;
+    let (geometry, ell, r) = (&result.scenario, &result.ellipses, &result.rmse);
+    let (rmse_cfg, abl_cfg, geo_cfg, info_cfg) =
+        (&cfg.rmse, &cfg.ablation, &cfg.geometry, &cfg.information);
+    let (abl, geo, info) = (&result.ablation, &result.geometry, &result.information);
 
     let mut figures = Vec::new();
     png::xy::render(
         &ctx.path("homotopy-fig1-scenario.png"),
-        &scenario_plot(&geometry),
+        &scenario_plot(geometry),
     )?;
     figures.push(Figure {
         file: "homotopy-fig1-scenario.png".into(),
@@ -134,8 +71,8 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             geometry.turn[1]
         ),
     });
-    let whole = ellipse_plot(&ell, &geometry);
-    let motion = EllipseMotion::of(&ell);
+    let whole = ellipse_plot(ell, geometry);
+    let motion = EllipseMotion::of(ell);
     // Wide enough for the centres' path and the true position.
     let reach = (motion.midpoint[0] - ell.truth[0])
         .abs()
@@ -223,7 +160,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     });
     png::line::render(
         &ctx.path("homotopy-information.png"),
-        &information_plot(&info, info_cfg.realisations),
+        &information_plot(info, info_cfg.realisations),
     )?;
     figures.push(Figure {
         file: "homotopy-information.png".into(),
@@ -236,9 +173,9 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
              with σ = ½° peaks there (peak at sample {}), the counter-clockwise turn hardly \
              rises, and with σ = 1° or ¼° the peak moves to sample {} or {}.",
             info_cfg.realisations,
-            peak_label(&info, 0),
-            peak_label(&info, 2),
-            peak_label(&info, 3),
+            peak_label(info, 0),
+            peak_label(info, 2),
+            peak_label(info, 3),
         ),
     });
     let steps: Vec<f64> = abl.lambda_steps.iter().map(|&m| m as f64).collect();
@@ -363,7 +300,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             ],
         ],
     }];
-    tables.push(geometry_table(&geo, &geo_cfg));
+    tables.push(geometry_table(geo, geo_cfg));
     let notes = vec![
         format!(
             "Final RMS errors: OHF {:.0} m, AOHF {:.0} m, UKF-LPC {:.0} m, PF {:.0} m (over {} \
@@ -381,12 +318,17 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             r.rmse.ukf_lpc[last],
             r.rmse.pf[last],
             rmse_cfg.realisations,
-            if r.rmse.ohf[last] < r.rmse.ukf_lpc[last] && r.rmse.aohf[last] < r.rmse.ukf_lpc[last] {
+            if papers_ordering_holds(&PerAlgorithm {
+                ohf: r.rmse.ohf[last],
+                aohf: r.rmse.aohf[last],
+                ukf_lpc: r.rmse.ukf_lpc[last],
+                pf: r.rmse.pf[last],
+            }) {
                 "ours agree"
             } else {
                 "ours do not at this scale"
             },
-            ohf_against_aohf(&r.final_errors)
+            ohf_note(&r.ohf_against_aohf())
         ),
         format!(
             "Cost: AOHF takes {:.2} of the OHF's time here (the paper: about a quarter). The \
@@ -415,31 +357,27 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     if ctx.write_rrd() {
         #[cfg(feature = "rrd")]
         {
-            let mut rng = pf_core::mc::stream_rng(seed, 11);
-            let real = scenario.simulate(&mut rng).map_err(homotopy)?;
-            let mut settings = rmse_cfg.filters;
-            settings.particles = settings.particles.min(10_000);
-            let mut estimates = Vec::new();
-            for alg in pf_homotopy::filters::Algorithm::ALL {
-                let est = pf_homotopy::filters::track(alg, &scenario, &settings, &real, &mut rng)
-                    .map_err(homotopy)?;
-                estimates.push((alg.name(), est));
-            }
-            crate::rrd::homotopy::save(&ctx.path("homotopy.rrd"), &ell, &real, &estimates)?;
+            let traced =
+                pf_homotopy::experiments::tracks(&pf_homotopy::experiments::TracksConfig {
+                    seed,
+                    ..pf_homotopy::experiments::TracksConfig::at_scale(ctx.scale)
+                })
+                .map_err(homotopy)?;
+            let estimates: Vec<(&str, Vec<[f64; 2]>)> = traced
+                .estimates
+                .iter()
+                .map(|(name, e)| (name.as_str(), e.clone()))
+                .collect();
+            crate::rrd::homotopy::save(
+                &ctx.path("homotopy.rrd"),
+                ell,
+                &traced.realisation,
+                &estimates,
+            )?;
             files.push("homotopy.rrd".to_owned());
         }
     }
 
-    let result = HomotopyResult {
-        seed,
-        scenario: geometry,
-        ellipses: ell,
-        rmse_config: rmse_cfg,
-        rmse: r,
-        ablation: abl,
-        geometry: geo,
-        information: info,
-    };
     Ok(SectionReport {
         result: to_json(ctx, &result)?,
         figures,
@@ -451,32 +389,18 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     })
 }
 
-/// The paper's "OHF best by a significant margin" against our final errors: each filter's
-/// final RMS with ± 2 standard errors (delta method), and whether the gap exceeds twice the
-/// standard error of the paired difference (both filters run on the same realisations; by
-/// the delta method each realisation adds `e²_OHF/(2·RMS_OHF) − e²_AOHF/(2·RMS_AOHF)`).
-fn ohf_against_aohf(finals: &PerAlgorithm<Vec<f64>>) -> String {
-    let squares = |e: &[f64]| e.iter().map(|x| x * x).collect::<Vec<_>>();
-    let (o_sq, a_sq) = (squares(&finals.ohf), squares(&finals.aohf));
-    let (o, o_se) = rms_and_se(&o_sq);
-    let (a, a_se) = rms_and_se(&a_sq);
-    let se = if o_sq.len() == a_sq.len() && o > 0.0 && a > 0.0 {
-        let d: Vec<f64> = o_sq
-            .iter()
-            .zip(&a_sq)
-            .map(|(x, y)| x / (2.0 * o) - y / (2.0 * a))
-            .collect();
-        pf_core::mc::mean_and_se(&d).1
-    } else {
-        o_se.hypot(a_se)
-    };
-    let two_se = 2.0 * se;
+/// The paper's "OHF best by a significant margin" against our final errors, in words: each
+/// filter's final RMS with ± 2 standard errors, and whether the gap exceeds twice the
+/// standard error of the paired difference.
+fn ohf_note(c: &OhfAgainstAohf) -> String {
+    let (o, a) = (c.ohf, c.aohf);
+    let two_se = 2.0 * c.difference_se;
     let bands = format!(
         "OHF {o:.0} ± {:.0} m, AOHF {a:.0} ± {:.0} m, ± 2 s.e.",
-        2.0 * o_se,
-        2.0 * a_se
+        2.0 * c.ohf_se,
+        2.0 * c.aohf_se
     );
-    if (o - a).abs() <= two_se {
+    if !c.distinguishable() {
         format!(
             "Its OHF, best by a significant margin, cannot be told from the AOHF here \
              ({bands}): their paired difference, {:+.0} m, is within 2 s.e. ({two_se:.0} m).",
@@ -587,7 +511,7 @@ fn geometry_table(geo: &GeometryResult, cfg: &GeometryConfig) -> Table {
         .iter()
         .map(|c| {
             let (r, s) = (&c.final_rmse, &c.final_rmse_se);
-            let holds = r.ohf < r.ukf_lpc && r.aohf < r.ukf_lpc;
+            let holds = papers_ordering_holds(r);
             vec![
                 turn_word(c.turn_rate_deg).into(),
                 format!("{}°", c.sigma_deg),
@@ -821,6 +745,7 @@ fn ellipse_plot(r: &EllipsesResult, g: &ScenarioGeometry) -> XyPlot {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pf_homotopy::experiments::ohf_against_aohf;
 
     fn finals(ohf: Vec<f64>, aohf: Vec<f64>) -> PerAlgorithm<Vec<f64>> {
         PerAlgorithm {
@@ -831,16 +756,17 @@ mod tests {
         }
     }
 
-    /// The verdict names the filter that ends lower only when the paired difference is
+    /// The note names the filter that ends lower only when the paired difference is
     /// beyond 2 s.e.: errors 3, 4 against 30, 40 (either way round) are; 3, 5 against 3, 4
     /// (RMS 4.12 and 3.54, paired 2 s.e. 0.95) are not.
     #[test]
-    fn the_ohf_verdict_follows_the_final_errors() {
-        let best = ohf_against_aohf(&finals(vec![3.0, 4.0], vec![30.0, 40.0]));
+    fn the_ohf_note_follows_the_final_errors() {
+        let note = |o, a| ohf_note(&ohf_against_aohf(&finals(o, a)));
+        let best = note(vec![3.0, 4.0], vec![30.0, 40.0]);
         assert!(best.starts_with("Its OHF is best here too"), "{best}");
-        let beaten = ohf_against_aohf(&finals(vec![30.0, 40.0], vec![3.0, 4.0]));
+        let beaten = note(vec![30.0, 40.0], vec![3.0, 4.0]);
         assert!(beaten.contains("is not reproduced"), "{beaten}");
-        let tied = ohf_against_aohf(&finals(vec![3.0, 5.0], vec![3.0, 4.0]));
+        let tied = note(vec![3.0, 5.0], vec![3.0, 4.0]);
         assert!(tied.contains("cannot be told from the AOHF"), "{tied}");
         assert!(tied.contains("+1 m, is within 2 s.e. (1 m)"), "{tied}");
     }

@@ -9,8 +9,8 @@
 //! on the `step` timeline.
 
 use pf_mpf::experiments::{
-    Fig3Config, Fig3Result, RatioConfig, RatioResult, TableConfig, TableReport, fig3, ratio,
-    table2, table3,
+    Fig3Config, Fig3Result, RatioConfig, RatioResult, TableConfig, TableReport, TableResult,
+    TracesConfig, fig3, ratio, table2, table3,
 };
 use serde::Serialize;
 
@@ -20,7 +20,6 @@ use crate::png;
 use crate::png::line::{LinePlot, RefLine, Series};
 use crate::png::style::{AxisScale, LegendPos};
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle};
-use pf_core::mc::Scale;
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
@@ -56,18 +55,18 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     let scale = ctx.scale;
     let bar = ctx.progress.bar("mpf", 4);
     bar.set_message("Figs. 1-2");
-    let ratio_result = ratio(&RatioConfig::default()).map_err(mpf)?;
+    let ratio_result = ratio(&RatioConfig::at_scale(scale)).map_err(mpf)?;
     bar.inc(1);
     bar.set_message("Fig. 3 (calibration and timing)");
     let fig3_cfg = Fig3Config {
         seed: ctx.seed,
-        ..Fig3Config::at(scale)
+        ..Fig3Config::at_scale(scale)
     };
     let fig3_result = fig3(&fig3_cfg).map_err(mpf)?;
     bar.inc(1);
     let table_cfg = TableConfig {
         seed: ctx.seed,
-        ..TableConfig::at(scale)
+        ..TableConfig::at_scale(scale)
     };
     bar.set_message("Table II");
     let t2 = table2(&table_cfg).map_err(mpf)?;
@@ -206,7 +205,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         format!(
             "Table III: PPKKKK reaches the standard PF's velocity RMSE in {share:.0} % of its \
              time; the paper's headline is 14 %. {}",
-            marginalization_verdict(&t2.table.partitions)
+            marginalization_verdict(&t2.table)
         ),
         "Table I's rows sum to 4k³ flops where eq. (11) prints 5k³; we implement eq. (11) \
          as printed (a test pins the gap to exactly k³)."
@@ -227,29 +226,16 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
 
     #[cfg_attr(not(feature = "rrd"), allow(unused_mut))] // only the recording adds files
     let mut files = Vec::new();
-    let recorded_particles = if ctx.scale == Scale::Quick { 100 } else { 500 };
+    let traces_cfg = TracesConfig {
+        seed: ctx.seed,
+        ..TracesConfig::at_scale(scale)
+    };
+    let recorded_particles = traces_cfg.particles;
     if ctx.write_rrd() {
         #[cfg(feature = "rrd")]
         {
-            let radar = &table_cfg.radar;
-            let truth = radar.truth();
-            use pf_mpf::radar::{Partition, RunTrace, trace_partition};
-            let mut runs: Vec<(String, RunTrace)> = Vec::new();
-            for part in Partition::paper() {
-                let mut rng = pf_core::mc::stream_rng(ctx.seed, 7);
-                let ys = radar.measure(&truth, &mut rng);
-                let (_, trace) = trace_partition(
-                    &part,
-                    radar,
-                    pf_mpf::mpf::MpfConfig::new(recorded_particles),
-                    &truth,
-                    &ys,
-                    &mut rng,
-                )
-                .map_err(mpf)?;
-                runs.push((part.name(), trace));
-            }
-            crate::rrd::mpf::save(&ctx.path("mpf.rrd"), &truth, &runs)?;
+            let traced = pf_mpf::experiments::traces(&traces_cfg).map_err(mpf)?;
+            crate::rrd::mpf::save(&ctx.path("mpf.rrd"), &traced.truth, &traced.runs)?;
             files.push("mpf.rrd".to_owned());
         }
     }
@@ -274,13 +260,15 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     })
 }
 
-/// Whether full marginalization (PPKKKK) lowers both RMSEs of the standard PF (the first
-/// row) at equal time, Table II, as the paper reports.
-fn marginalization_verdict(rows: &[pf_mpf::experiments::TableRow]) -> String {
-    let (Some(pf), Some(full)) = (rows.first(), rows.iter().find(|r| r.name == "PPKKKK")) else {
+/// Whether full marginalization (PPKKKK) lowers both RMSEs of the standard PF at equal
+/// time, Table II, as the paper reports, in words.
+fn marginalization_verdict(table: &TableResult) -> String {
+    let (Some((pf, full)), Some(both)) = (
+        table.pf_and_full(),
+        table.full_marginalization_lowers_both(),
+    ) else {
         return "Table II has no PPKKKK row to compare with the standard PF.".into();
     };
-    let both = full.rmse_pos < pf.rmse_pos && full.rmse_vel < pf.rmse_vel;
     format!(
         "At equal time (Table II) full marginalization {} the standard PF's RMSE (position \
          {:.2} → {:.2}, velocity {:.2} → {:.2}){}",
@@ -488,13 +476,16 @@ mod tests {
     /// The verdict agrees with the paper only when both RMSEs fall, and says so otherwise.
     #[test]
     fn the_marginalization_verdict_follows_table_two() {
-        let lower = marginalization_verdict(&[row("PF", 7.9, 3.4), row("PPKKKK", 7.1, 3.1)]);
+        let table = |rows: Vec<TableRow>| TableResult { partitions: rows };
+        let lower =
+            marginalization_verdict(&table(vec![row("PF", 7.9, 3.4), row("PPKKKK", 7.1, 3.1)]));
         assert!(
             lower.contains("lowers") && lower.ends_with("as the paper reports."),
             "{lower}"
         );
-        let mixed = marginalization_verdict(&[row("PF", 7.9, 3.0), row("PPKKKK", 7.1, 3.1)]);
+        let mixed =
+            marginalization_verdict(&table(vec![row("PF", 7.9, 3.0), row("PPKKKK", 7.1, 3.1)]));
         assert!(mixed.contains("does not lower both"), "{mixed}");
-        assert!(marginalization_verdict(&[row("PF", 1.0, 1.0)]).contains("no PPKKKK"));
+        assert!(marginalization_verdict(&table(vec![row("PF", 1.0, 1.0)])).contains("no PPKKKK"));
     }
 }
