@@ -4,6 +4,7 @@
 use nalgebra::{DMatrix, DVector};
 use pf_core::kalman::{KalmanState, LinearGaussian};
 use pf_core::mc::stream_rng;
+use pf_core::params::ParamError;
 use pf_dredge::direct::{DirectConfig, direct_computation};
 use pf_dredge::estimator::{
     EstimateConfig, EstimatorConfig, OnlineEstimator, estimate, run_filter,
@@ -302,7 +303,7 @@ fn bad_inputs_get_their_errors() {
         assert!(
             matches!(
                 simulate(&sim, 7),
-                Err(DredgeError::InvalidParameter { name: n, .. }) if n == name
+                Err(DredgeError::Param(ParamError { name: n, .. })) if n == name
             ),
             "{name}"
         );

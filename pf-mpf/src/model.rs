@@ -15,6 +15,7 @@
 
 use crate::error::{MpfError, Result};
 use nalgebra::{Cholesky, SMatrix, SVector};
+use pf_core::params::ParamError;
 use pf_core::{CoreError, StateSpaceModel};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -90,11 +91,11 @@ pub(crate) fn spd_chol<const D: usize>(
         for i in (j + 1)..D {
             let gap = m[(i, j)] - m[(j, i)];
             if gap.abs() > 1e-10 * scale {
-                return Err(CoreError::InvalidParameter {
+                return Err(CoreError::Param(ParamError {
                     name: what,
                     value: gap,
                     reason: "covariance must be symmetric (value is M_ij − M_ji)",
-                }
+                })
                 .into());
             }
         }

@@ -27,6 +27,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef};
 use nalgebra::{Cholesky, SMatrix, SVector, SVectorView};
 use pf_core::filter::StepReport;
+use pf_core::params::ParamError;
 use pf_core::resample::{Resample, Resampler};
 use pf_core::weights;
 use rand::Rng;
@@ -84,11 +85,11 @@ impl MpfConfig {
     /// `N = 0`, or `N` above [`MAX_COUNT`](pf_core::limits::MAX_COUNT).
     pub fn validate(&self) -> Result<()> {
         if self.n_particles == 0 {
-            return Err(MpfError::InvalidParameter {
+            return Err(MpfError::Param(ParamError {
                 name: "N",
                 value: 0.0,
                 reason: "the number of particles must be at least 1",
-            });
+            }));
         }
         pf_core::limits::check_count("the number of particles N", self.n_particles)?;
         Ok(())

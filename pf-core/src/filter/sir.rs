@@ -7,6 +7,7 @@ use crate::limits::{
 };
 use crate::model::{EuclideanState, Proposal, StateSpaceModel, TransitionDensity};
 use crate::observe::{Observer, StepView};
+use crate::params::ParamError;
 use crate::particles;
 use crate::resample::{Resample, Resampler};
 use crate::weights;
@@ -39,11 +40,11 @@ impl FilterConfig {
     /// Check that the configuration can run.
     pub fn validate(&self) -> Result<()> {
         if self.n_particles == 0 {
-            return Err(CoreError::InvalidParameter {
+            return Err(CoreError::Param(ParamError {
                 name: "N",
                 value: 0.0,
                 reason: "the number of particles must be at least 1",
-            });
+            }));
         }
         check_count("the number of particles N", self.n_particles)?;
         self.policy.validate()

@@ -17,6 +17,7 @@
 
 use nalgebra::{Matrix4, RowVector4, Vector4};
 use pf_core::filter::{EssThreshold, FilterConfig, Guided, ParticleFilter, ResamplePolicy};
+use pf_core::params::ParamError;
 use pf_core::resample::Resampler;
 use pf_core::{Proposal, StateSpaceModel, StepAt, TransitionDensity};
 use rand::Rng;
@@ -56,11 +57,11 @@ impl BotModel {
         scenario.validate()?;
         check_data("bearing", 1, y1)?;
         let q = scenario.q_matrix();
-        let chol = q.cholesky().ok_or(HomotopyError::InvalidParameter {
+        let chol = q.cholesky().ok_or(HomotopyError::Param(ParamError {
             name: "q",
             value: scenario.q,
             reason: "Q must be positive definite",
-        })?;
+        }))?;
         let lq = chol.l();
         let ln_det_q = 2.0 * (0..4).map(|i| lq[(i, i)].ln()).sum::<f64>();
         Ok(Self {

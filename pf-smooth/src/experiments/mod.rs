@@ -11,13 +11,14 @@ use crate::em::{
     Estimator, ParticleSchedule, StochasticEm, paper_filter_config, particle_statistics,
     run_statistics,
 };
-use crate::error::{Result, at_least_one};
+use crate::error::Result;
 use crate::exact::{exact_em, exact_em_step, exact_statistics};
 use crate::fixed_lag::FixedLag;
 use crate::path_space::PathSpace;
 use pf_core::filter::ParticleFilter;
 use pf_core::mc::{Par, try_replicate};
 use pf_core::observe::{Observer, StepView};
+use pf_core::params::at_least_one;
 use serde::{Deserialize, Serialize};
 
 /// Arguments of `pf-viz smooth em`.
@@ -64,7 +65,7 @@ impl EmExperiment {
     /// Check σ, ρ > 0, φ finite, N, R ≥ 1, δ ≥ 1.
     ///
     /// # Errors
-    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
+    /// [`SmoothError::Param`](crate::SmoothError::Param) naming the argument.
     pub fn validate(&self) -> Result<Theta> {
         let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
         at_least_one("particles", self.particles)?;
@@ -167,7 +168,7 @@ impl SemExperiment {
     /// Check σ, ρ > 0, φ finite, N, C ≥ 1, and C no more than a machine can hold.
     ///
     /// # Errors
-    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
+    /// [`SmoothError::Param`](crate::SmoothError::Param) naming the argument.
     pub fn validate(&self) -> Result<Theta> {
         let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
         at_least_one("particles", self.particles)?;
@@ -248,7 +249,7 @@ impl ScoreExperiment {
     /// Check σ, ρ > 0, φ finite, N, R ≥ 1.
     ///
     /// # Errors
-    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
+    /// [`SmoothError::Param`](crate::SmoothError::Param) naming the argument.
     pub fn validate(&self) -> Result<Theta> {
         let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
         at_least_one("particles", self.particles)?;
