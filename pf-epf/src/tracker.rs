@@ -164,7 +164,7 @@ pub enum Record {
     Particles,
 }
 
-type TargetFilter = ParticleFilter<TargetModel, OptimalProposal, Resampler>;
+type TargetFilter = ParticleFilter<TargetModel, OptimalProposal>;
 
 /// One target's filter and dynamic model.
 struct TargetState {
@@ -232,7 +232,7 @@ impl Tracker {
                 q: cfg.q,
                 r: cfg.r,
             };
-            let mut pf = ParticleFilter::new(model, OptimalProposal, fc.resampler, fc)?;
+            let mut pf = ParticleFilter::new(model, OptimalProposal, fc)?;
             pf.step(None, None, rng)?;
             targets.push(TargetState {
                 pf,

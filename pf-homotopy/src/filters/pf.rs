@@ -17,7 +17,6 @@
 
 use nalgebra::{Matrix4, RowVector4, Vector4};
 use pf_core::filter::{EssThreshold, FilterConfig, Guided, ParticleFilter, ResamplePolicy};
-use pf_core::params::ParamError;
 use pf_core::resample::Resampler;
 use pf_core::{Proposal, StateSpaceModel, StepAt, TransitionDensity};
 use rand::Rng;
@@ -28,6 +27,7 @@ use crate::model::bearing;
 use crate::model::{PriorConfig, Realisation, ScenarioConfig, State};
 use crate::prior::sample_prior;
 use pf_core::geometry::wrap_angle;
+use pf_core::params::ParamError;
 
 const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
@@ -205,7 +205,7 @@ impl Proposal<BotModel> for LinearisedOptimal {
 pub fn particle_filter(
     model: BotModel,
     n: usize,
-) -> Result<ParticleFilter<BotModel, Guided<LinearisedOptimal>, Resampler>> {
+) -> Result<ParticleFilter<BotModel, Guided<LinearisedOptimal>>> {
     let cfg = FilterConfig {
         n_particles: n,
         resampler: Resampler::Systematic,
