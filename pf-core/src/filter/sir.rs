@@ -334,7 +334,7 @@ impl<M: StateSpaceModel, P: Mutation<M>> ParticleFilter<M, P> {
             }
             reports.push(report);
         }
-        observer.on_finish();
+        observer.on_finish()?;
         Ok(RunSummary {
             log_lik: self.log_likelihood(),
             reports,
@@ -496,6 +496,32 @@ mod tests {
             count > 0 && count < 100,
             "the test must exercise both branches"
         );
+    }
+
+    /// An observer's error (here one that always fails) comes out of `run`, after the
+    /// other members of the tuple finished.
+    #[test]
+    fn run_returns_an_observers_error() {
+        struct Fails;
+        impl<S> Observer<S> for Fails {
+            fn on_finish(&mut self) -> Result<()> {
+                Err(CoreError::Empty {
+                    what: "test observer",
+                })
+            }
+        }
+        let mut pf = ParticleFilter::bootstrap(ar1(), FilterConfig::new(8)).unwrap();
+        let mut obs = (EssRecorder::new(), Fails);
+        let e = pf
+            .run(&data(5), None, &mut stream_rng(1, 0), &mut obs)
+            .unwrap_err();
+        assert_eq!(
+            e,
+            CoreError::Empty {
+                what: "test observer"
+            }
+        );
+        assert_eq!(obs.0.ess().len(), data(5).len());
     }
 
     #[test]
