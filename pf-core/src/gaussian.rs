@@ -17,8 +17,9 @@ use rand_distr::{Distribution, StandardNormal};
 use crate::error::{CoreError, Result};
 use crate::params::ParamError;
 
-/// `ln(2π)`.
-const LN_2PI: f64 = 1.837_877_066_409_345_5;
+/// `ln(2π)`, correctly rounded: the normalising constant of every Gaussian density in the
+/// workspace (`−½ d ln 2π` in `d` dimensions).
+pub const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// Lower Cholesky factor `L` of a symmetric positive-definite `m = L·Lᵀ`.
 ///
@@ -337,6 +338,15 @@ pub fn error_ellipse(mean: [f64; 2], cov: [[f64; 2]; 2], mass: f64) -> Result<Er
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `LN_2PI` is the f64 nearest to ln 2π: fifty digits of ln 2π parse (correctly
+    /// rounded) to it. `(2π).ln()` is one ulp below, since `2.0 * PI` is already rounded.
+    #[test]
+    fn ln_2pi_is_correctly_rounded() {
+        let digits = "1.8378770664093454835606594728112352797227949472756";
+        assert_eq!(LN_2PI, digits.parse::<f64>().unwrap());
+        assert_eq!(0.5 * LN_2PI, 0.918_938_533_204_672_8);
+    }
     use rand::SeedableRng;
     use rand::rngs::Xoshiro256PlusPlus;
 

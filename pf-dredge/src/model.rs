@@ -18,6 +18,7 @@
 
 use crate::error::{DredgeError, Result};
 use pf_core::StateSpaceModel;
+use pf_core::gaussian::LN_2PI;
 use pf_core::params::{ParamError, finite, non_negative, positive};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -173,9 +174,8 @@ impl Prior {
 }
 
 fn gauss_log_pdf(x: f64, mean: f64, sigma: f64) -> f64 {
-    const HALF_LN_2PI: f64 = 0.918_938_533_204_672_8;
     let z = (x - mean) / sigma;
-    -0.5 * z * z - sigma.ln() - HALF_LN_2PI
+    -0.5 * z * z - sigma.ln() - 0.5 * LN_2PI
 }
 
 impl StateSpaceModel for OverflowModel {

@@ -20,11 +20,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{HomotopyError, Result};
 use crate::param::{Gaussian, log_normal};
+use pf_core::gaussian::LN_2PI;
 use pf_core::geometry::wrap_angle;
 use pf_core::params::{ParamError, positive};
 use pf_core::simd::math::exp_nonpositive;
-
-const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// Quadrature nodes, reused from one call to the next (no allocation once grown).
 #[derive(Debug, Clone, Default)]

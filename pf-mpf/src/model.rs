@@ -15,6 +15,7 @@
 
 use crate::error::{MpfError, Result};
 use nalgebra::{Cholesky, SMatrix, SVector};
+use pf_core::gaussian::LN_2PI;
 use pf_core::params::ParamError;
 use pf_core::{CoreError, StateSpaceModel};
 use rand::Rng;
@@ -313,7 +314,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>>
 /// `½ log det(2π L Lᵀ)`.
 pub(crate) fn half_log_det_2pi<const D: usize>(l: &SMatrix<f64, D, D>) -> f64 {
     let log_diag: f64 = (0..D).map(|i| l[(i, i)].ln()).sum();
-    log_diag + 0.5 * D as f64 * (2.0 * std::f64::consts::PI).ln()
+    log_diag + 0.5 * D as f64 * LN_2PI
 }
 
 /// `log N(e; 0, L Lᵀ)` given `½ log det(2π L Lᵀ)`.

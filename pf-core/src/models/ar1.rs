@@ -2,12 +2,11 @@
 
 use crate::error::Result;
 use crate::filter::ScalarModel;
+use crate::gaussian::LN_2PI;
 use crate::model::{StateSpaceModel, TransitionDensity};
 use crate::params::{self, ParamError, positive};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
-
-const LN_2PI: f64 = 1.837_877_066_409_345_3;
 
 /// `X_{k+1} = φ X_k + σ U_k`, `Y_k = X_k + ρ V_k`, with `U_k, V_k ~ N(0, 1)` and
 /// `X_0 ~ N(m_0, s_0²)`.

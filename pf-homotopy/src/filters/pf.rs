@@ -26,10 +26,9 @@ use crate::error::{HomotopyError, Result, check_data};
 use crate::model::bearing;
 use crate::model::{PriorConfig, Realisation, ScenarioConfig, State};
 use crate::prior::sample_prior;
+use pf_core::gaussian::LN_2PI;
 use pf_core::geometry::wrap_angle;
 use pf_core::params::ParamError;
-
-const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// The BOT state-space model for pf-core: `t = 0` is sampling instant `k = 1`, whose
 /// bearing `y_1` builds the prior (so the filter is given `None` there).
