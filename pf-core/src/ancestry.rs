@@ -13,6 +13,7 @@
 //! nothing.
 
 use crate::error::{CoreError, Result};
+use crate::params::ParamError;
 
 const NONE: u32 = u32::MAX;
 
@@ -39,7 +40,7 @@ impl<S: Clone> AncestryTree<S> {
     /// A tree whose step-0 particles hold `initial`.
     ///
     /// # Errors
-    /// [`CoreError::Empty`] for no particles; [`CoreError::InvalidParameter`] for more than
+    /// [`CoreError::Empty`] for no particles; [`CoreError::Param`] for more than
     /// `u32::MAX − 1` particles (node ids are 32-bit to halve the memory).
     pub fn new(initial: &[S]) -> Result<Self> {
         if initial.is_empty() {
@@ -48,11 +49,11 @@ impl<S: Clone> AncestryTree<S> {
             });
         }
         if initial.len() >= NONE as usize {
-            return Err(CoreError::InvalidParameter {
+            return Err(CoreError::Param(ParamError {
                 name: "N",
                 value: initial.len() as f64,
                 reason: "an ancestry tree holds fewer than 2^32 - 1 particles",
-            });
+            }));
         }
         let n = initial.len();
         Ok(AncestryTree {
@@ -114,11 +115,11 @@ impl<S: Clone> AncestryTree<S> {
             }
         }
         if let Some(bad) = ancestors.iter().position(|&a| a >= n) {
-            return Err(CoreError::InvalidParameter {
+            return Err(CoreError::Param(ParamError {
                 name: "ancestor index",
                 value: bad as f64,
                 reason: "ancestor index out of range at this position",
-            });
+            }));
         }
         for i in 0..n {
             let p = self.leaves[ancestors[i]];

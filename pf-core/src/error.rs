@@ -1,5 +1,6 @@
 //! The engine's error type: every variant says what went wrong and where.
 
+pub use crate::params::ParamError;
 use thiserror::Error;
 
 /// Errors returned by pf-core. Variants carry the time step, index or parameter at fault.
@@ -44,16 +45,9 @@ pub enum CoreError {
         /// Actual size.
         got: usize,
     },
-    /// A parameter is outside its valid range.
-    #[error("invalid parameter {name} = {}: {reason}", Shown(*value))]
-    InvalidParameter {
-        /// Parameter name, as the paper writes it where possible.
-        name: &'static str,
-        /// The offending value.
-        value: f64,
-        /// What the valid range is.
-        reason: &'static str,
-    },
+    /// A parameter is outside its valid range (see [`crate::params`]).
+    #[error(transparent)]
+    Param(#[from] ParamError),
     /// Input data contain a NaN or infinite value.
     #[error("non-finite value {value} in {what} at index {index}")]
     NonFiniteData {
@@ -133,11 +127,11 @@ mod tests {
         assert_eq!(shown(f64::NAN), "NaN");
         assert_eq!(shown(1e-300), "1e-300");
         assert_eq!(shown(usize::MAX as f64), "1.8446744073709552e19");
-        let e = CoreError::InvalidParameter {
+        let e = CoreError::Param(ParamError {
             name: "budget",
             value: 1e308,
             reason: "too large",
-        };
+        });
         assert_eq!(e.to_string(), "invalid parameter budget = 1e308: too large");
     }
 }

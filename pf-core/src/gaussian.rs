@@ -15,9 +15,11 @@ use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
 use crate::error::{CoreError, Result};
+use crate::params::ParamError;
 
-/// `ln(2π)`.
-const LN_2PI: f64 = 1.837_877_066_409_345_5;
+/// `ln(2π)`, correctly rounded: the normalising constant of every Gaussian density in the
+/// workspace (`−½ d ln 2π` in `d` dimensions).
+pub const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// Lower Cholesky factor `L` of a symmetric positive-definite `m = L·Lᵀ`.
 ///
@@ -288,11 +290,11 @@ impl ErrorEllipse {
 /// definite.
 pub fn error_ellipse(mean: [f64; 2], cov: [[f64; 2]; 2], mass: f64) -> Result<ErrorEllipse> {
     if !(mass > 0.0 && mass < 1.0) {
-        return Err(CoreError::InvalidParameter {
+        return Err(CoreError::Param(ParamError {
             name: "mass",
             value: mass,
             reason: "the ellipse's probability mass must lie in (0, 1)",
-        });
+        }));
     }
     for (index, &value) in mean.iter().enumerate() {
         if !value.is_finite() {
@@ -306,11 +308,11 @@ pub fn error_ellipse(mean: [f64; 2], cov: [[f64; 2]; 2], mass: f64) -> Result<Er
     let (a, b01, b10, c) = (cov[0][0], cov[0][1], cov[1][0], cov[1][1]);
     let scale = a.abs().max(c.abs()).max(b01.abs());
     if (b01 - b10).abs() > 1e-12 * scale {
-        return Err(CoreError::InvalidParameter {
+        return Err(CoreError::Param(ParamError {
             name: "cov[0][1] − cov[1][0]",
             value: b01 - b10,
             reason: "the ellipse covariance must be symmetric",
-        });
+        }));
     }
     let m = DMatrix::from_row_slice(2, 2, &[a, b01, b10, c]);
     cholesky("ellipse covariance", &m)?;
@@ -336,6 +338,15 @@ pub fn error_ellipse(mean: [f64; 2], cov: [[f64; 2]; 2], mass: f64) -> Result<Er
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `LN_2PI` is the f64 nearest to ln 2π: fifty digits of ln 2π parse (correctly
+    /// rounded) to it. `(2π).ln()` is one ulp below, since `2.0 * PI` is already rounded.
+    #[test]
+    fn ln_2pi_is_correctly_rounded() {
+        let digits = "1.8378770664093454835606594728112352797227949472756";
+        assert_eq!(LN_2PI, digits.parse::<f64>().unwrap());
+        assert_eq!(0.5 * LN_2PI, 0.918_938_533_204_672_8);
+    }
     use rand::SeedableRng;
     use rand::rngs::Xoshiro256PlusPlus;
 
@@ -485,7 +496,7 @@ mod tests {
         ));
         assert!(matches!(
             error_ellipse([0.0, 0.0], [[1.0, 0.0], [0.0, 1.0]], 1.0),
-            Err(CoreError::InvalidParameter { name: "mass", .. })
+            Err(CoreError::Param(ParamError { name: "mass", .. }))
         ));
     }
 

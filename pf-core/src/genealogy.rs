@@ -7,6 +7,7 @@
 //! its variance grows with `n` and why the fixed-lag estimator exists.
 
 use crate::error::{CoreError, Result};
+use crate::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// Ancestor indices of every step: `A_k^i` for `k = 1, …, n`.
@@ -41,11 +42,11 @@ impl Genealogy {
             });
         }
         if let Some(bad) = ancestors.iter().position(|&a| a >= self.n_particles) {
-            return Err(CoreError::InvalidParameter {
+            return Err(CoreError::Param(ParamError {
                 name: "ancestor index",
                 value: bad as f64,
                 reason: "ancestor index out of range at this position",
-            });
+            }));
         }
         if self.n_steps > 0 {
             self.parents.push(ancestors.to_vec());

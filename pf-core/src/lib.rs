@@ -9,6 +9,7 @@
 //! |---|---|
 //! | [`model`] | [`StateSpaceModel`] and the optional capabilities |
 //! | [`models`] | ready-made models (the noisy AR(1)) |
+//! | [`params`] | the parameter checks every crate uses, and their error |
 //! | [`weights`] | the one log-sum-exp, normalisation and ESS |
 //! | [`particles`] | weighted means and covariances of a particle set |
 //! | [`resample`] | multinomial, systematic, stratified and residual schemes |
@@ -38,6 +39,7 @@ pub mod model;
 pub mod models;
 pub mod names;
 pub mod observe;
+pub mod params;
 pub mod particles;
 pub mod resample;
 pub mod simd;
@@ -47,3 +49,4 @@ pub mod weights;
 
 pub use error::{CoreError, Result};
 pub use model::{EuclideanState, Proposal, StateSpaceModel, StepAt, TransitionDensity};
+pub use params::ParamError;

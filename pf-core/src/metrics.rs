@@ -2,6 +2,7 @@
 //! equal-width histograms of residuals or estimates.
 
 use crate::error::{CoreError, Result};
+use crate::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// `‖a − b‖²`.
@@ -204,11 +205,11 @@ impl Histogram {
             });
         }
         if bins == 0 {
-            return Err(CoreError::InvalidParameter {
+            return Err(CoreError::Param(ParamError {
                 name: "bins",
                 value: 0.0,
                 reason: "a histogram needs at least one bin",
-            });
+            }));
         }
         if let Some(index) = x.iter().position(|v| !v.is_finite()) {
             return Err(CoreError::NonFiniteData {

@@ -16,11 +16,8 @@ use faer::{Mat, Side};
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::{CoreError, Result};
-use crate::gaussian::cholesky;
+use crate::gaussian::{LN_2PI, cholesky};
 use crate::kalman::LinearGaussian;
-
-/// `ln(2π)`.
-const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// The AR(1)-plus-noise model `X_{k+1} = φ X_k + σ U_k`, `Y_k = X_k + ρ V_k`
 /// (U, V standard normal), started in its stationary law `X_0 ~ N(0, σ²/(1 − φ²))` so that

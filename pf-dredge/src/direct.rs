@@ -11,7 +11,8 @@
 //! entries are `None` (`null` in JSON), never NaN.
 
 use crate::data::DredgeData;
-use crate::error::{DredgeError, Result, check_non_negative};
+use crate::error::{DredgeError, Result};
+use pf_core::params::{non_negative, positive};
 use serde::{Deserialize, Serialize};
 
 /// Settings of the direct computation.
@@ -42,9 +43,10 @@ impl DirectConfig {
     /// A non-positive cut-off or a negative `min_q_o`.
     pub fn validate(&self) -> Result<()> {
         if let Some(f) = self.cutoff_hz {
-            crate::error::check_positive("cutoff_hz", f)?;
+            positive("cutoff_hz", f)?;
         }
-        check_non_negative("min_q_o", self.min_q_o)
+        non_negative("min_q_o", self.min_q_o)?;
+        Ok(())
     }
 }
 
@@ -67,7 +69,7 @@ pub struct DirectEstimate {
 /// # Errors
 /// Lengths that differ, or a non-positive cut-off.
 pub fn zero_phase_lowpass(t: &[f64], x: &[f64], cutoff_hz: f64) -> Result<Vec<f64>> {
-    crate::error::check_positive("cutoff_hz", cutoff_hz)?;
+    positive("cutoff_hz", cutoff_hz)?;
     if t.len() != x.len() {
         return Err(DredgeError::ColumnLength {
             column: "signal to filter",

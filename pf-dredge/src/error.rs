@@ -2,6 +2,7 @@
 //! index, column), so the CLI can turn it into a one-line message.
 
 use pf_core::CoreError;
+use pf_core::params::ParamError;
 use thiserror::Error;
 
 /// Errors returned by pf-dredge.
@@ -11,16 +12,9 @@ pub enum DredgeError {
     /// An error from the SMC engine (degenerate weights, bad filter configuration, …).
     #[error(transparent)]
     Core(#[from] CoreError),
-    /// A configuration parameter is outside its valid range.
-    #[error("invalid parameter {name} = {}: {reason}", pf_core::error::Shown(*value))]
-    InvalidParameter {
-        /// Parameter name, as the paper writes it where possible.
-        name: &'static str,
-        /// The offending value.
-        value: f64,
-        /// What the valid range is.
-        reason: &'static str,
-    },
+    /// A parameter is outside its valid range (see [`pf_core::params`]).
+    #[error(transparent)]
+    Param(#[from] ParamError),
     /// The data set has fewer samples than the operation needs.
     #[error("the data set has {got} sample(s): at least {needed} are needed")]
     TooFewSamples {
@@ -111,27 +105,3 @@ pub enum DredgeError {
 
 /// Result alias for pf-dredge.
 pub type Result<T, E = DredgeError> = std::result::Result<T, E>;
-
-pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<()> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(DredgeError::InvalidParameter {
-            name,
-            value,
-            reason: "must be finite and > 0",
-        })
-    }
-}
-
-pub(crate) fn check_non_negative(name: &'static str, value: f64) -> Result<()> {
-    if value.is_finite() && value >= 0.0 {
-        Ok(())
-    } else {
-        Err(DredgeError::InvalidParameter {
-            name,
-            value,
-            reason: "must be finite and ≥ 0",
-        })
-    }
-}

@@ -25,6 +25,7 @@ use pf_core::filter::{EssThreshold, FilterConfig, ParticleFilter, ResamplePolicy
 use pf_core::mc::{Par, PfRng, stream_rng, try_replicate};
 use pf_core::metrics::ResidualSummary;
 use pf_core::observe::{Observer, StepView};
+use pf_core::params::ParamError;
 use pf_core::resample::Resampler;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -79,18 +80,18 @@ impl EstimatorConfig {
     /// `N = 0`, `N_T` outside `[0, N]`, or bad noise levels or prior.
     pub fn validate(&self) -> Result<()> {
         if self.n_particles == 0 {
-            return Err(DredgeError::InvalidParameter {
+            return Err(DredgeError::Param(ParamError {
                 name: "N",
                 value: 0.0,
                 reason: "at least one particle",
-            });
+            }));
         }
         if !(self.n_t >= 0.0 && self.n_t <= self.n_particles as f64) {
-            return Err(DredgeError::InvalidParameter {
+            return Err(DredgeError::Param(ParamError {
                 name: "N_T",
                 value: self.n_t,
                 reason: "the ESS threshold must lie in [0, N]",
-            });
+            }));
         }
         // The model checks σ(ε_x), σ(ε_y), T_s and the prior.
         self.model((0.0, 0.0)).map(|_| ())
@@ -473,11 +474,7 @@ impl OnlineMean {
     /// An invalid filter configuration, or no runs.
     pub fn new(cfg: &EstimateConfig) -> Result<Self> {
         if cfg.runs == 0 {
-            return Err(DredgeError::InvalidParameter {
-                name: "runs",
-                value: 0.0,
-                reason: "at least one filter run",
-            });
+            return Err(ParamError::new("runs", 0.0, "at least one filter run").into());
         }
         let filters = (0..cfg.runs)
             .map(|r| {
@@ -519,11 +516,11 @@ impl OnlineMean {
 pub fn estimate(data: &DredgeData, cfg: &EstimateConfig) -> Result<EstimateOutput> {
     cfg.filter.validate()?;
     if cfg.runs == 0 {
-        return Err(DredgeError::InvalidParameter {
+        return Err(DredgeError::Param(ParamError {
             name: "runs",
             value: 0.0,
             reason: "at least one filter run",
-        });
+        }));
     }
     let direct = direct_computation(data, &cfg.direct)?;
     let runs = try_replicate(cfg.seed, cfg.runs, Par::Rayon, |_, rng| {

@@ -16,8 +16,10 @@
 //! i.e. `u_{k−1}` held over `[t_{k−1}, t_k)`, and it carries that interval's length as its
 //! `T_s`, so irregular logs are handled.
 
-use crate::error::{DredgeError, Result, check_non_negative, check_positive};
+use crate::error::{DredgeError, Result};
 use pf_core::StateSpaceModel;
+use pf_core::gaussian::LN_2PI;
+use pf_core::params::{ParamError, finite, non_negative, positive};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -99,7 +101,7 @@ impl OverflowModel {
     /// The model with prior centred on a first measurement `(V_t,0, m_t,0)`.
     ///
     /// # Errors
-    /// [`DredgeError::InvalidParameter`] for a negative or non-finite `σ(ε_x)`, a
+    /// [`DredgeError::Param`] for a negative or non-finite `σ(ε_x)`, a
     /// non-positive `σ(ε_y)` or `T_s`, or a bad prior.
     pub fn new(
         sigma_x: [f64; 4],
@@ -117,19 +119,19 @@ impl OverflowModel {
         .into_iter()
         .zip(sigma_x)
         {
-            check_non_negative(name, s)?;
+            non_negative(name, s)?;
         }
-        check_positive("sigma_y[V_t]", sigma_y[0])?;
-        check_positive("sigma_y[m_t]", sigma_y[1])?;
-        check_positive("T_s", t_s)?;
+        positive("sigma_y[V_t]", sigma_y[0])?;
+        positive("sigma_y[m_t]", sigma_y[1])?;
+        positive("T_s", t_s)?;
         prior.validate()?;
         for (name, v) in [("V_t,0", y0.0), ("m_t,0", y0.1)] {
             if !v.is_finite() {
-                return Err(DredgeError::InvalidParameter {
+                return Err(DredgeError::Param(ParamError {
                     name,
                     value: v,
                     reason: "the first measurement must be finite",
-                });
+                }));
             }
         }
         Ok(OverflowModel {
@@ -157,29 +159,23 @@ impl Prior {
     /// Check the prior's numbers.
     ///
     /// # Errors
-    /// [`DredgeError::InvalidParameter`] naming the field.
+    /// [`DredgeError::Param`] naming the field.
     pub fn validate(&self) -> Result<()> {
         for (name, v) in [
             ("prior.q_o_mean", self.q_o_mean),
             ("prior.rho_o_mean", self.rho_o_mean),
         ] {
-            if !v.is_finite() {
-                return Err(DredgeError::InvalidParameter {
-                    name,
-                    value: v,
-                    reason: "must be finite",
-                });
-            }
+            finite(name, v)?;
         }
-        check_non_negative("prior.q_o_std", self.q_o_std)?;
-        check_non_negative("prior.rho_o_std", self.rho_o_std)
+        non_negative("prior.q_o_std", self.q_o_std)?;
+        non_negative("prior.rho_o_std", self.rho_o_std)?;
+        Ok(())
     }
 }
 
 fn gauss_log_pdf(x: f64, mean: f64, sigma: f64) -> f64 {
-    const HALF_LN_2PI: f64 = 0.918_938_533_204_672_8;
     let z = (x - mean) / sigma;
-    -0.5 * z * z - sigma.ln() - HALF_LN_2PI
+    -0.5 * z * z - sigma.ln() - 0.5 * LN_2PI
 }
 
 impl StateSpaceModel for OverflowModel {

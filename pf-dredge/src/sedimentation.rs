@@ -4,7 +4,8 @@
 //! The paper leaves every physical constant unstated; [`HopperParams::default`] holds the
 //! values this crate chose for a ~10 000 m³ trailing suction hopper dredger (see the README).
 
-use crate::error::{Result, check_positive};
+use crate::error::Result;
+use pf_core::params::{ParamError, positive};
 use serde::{Deserialize, Serialize};
 
 /// How the overflow pipe discharges.
@@ -71,30 +72,30 @@ impl HopperParams {
     /// Check that every constant is physical: positive, and `ρ_w < ρ_s < ρ_q`.
     ///
     /// # Errors
-    /// [`DredgeError::InvalidParameter`](crate::DredgeError::InvalidParameter) naming the
+    /// [`DredgeError::Param`](crate::DredgeError::Param) naming the
     /// constant.
     pub fn validate(&self) -> Result<()> {
-        check_positive("A", self.area)?;
-        check_positive("k_o", self.k_o)?;
-        check_positive("k'_o", self.k_o_full)?;
-        check_positive("k_c", self.k_c)?;
-        check_positive("v_s", self.v_s)?;
-        check_positive("beta", self.beta)?;
-        check_positive("rho_w", self.rho_w)?;
-        check_positive("g", self.g)?;
+        positive("A", self.area)?;
+        positive("k_o", self.k_o)?;
+        positive("k'_o", self.k_o_full)?;
+        positive("k_c", self.k_c)?;
+        positive("v_s", self.v_s)?;
+        positive("beta", self.beta)?;
+        positive("rho_w", self.rho_w)?;
+        positive("g", self.g)?;
         if self.rho_s.is_nan() || self.rho_s <= self.rho_w {
-            return Err(crate::DredgeError::InvalidParameter {
+            return Err(crate::DredgeError::Param(ParamError {
                 name: "rho_s",
                 value: self.rho_s,
                 reason: "the sand bed must be denser than water (rho_s > rho_w)",
-            });
+            }));
         }
         if !(self.rho_q > self.rho_s && self.rho_q.is_finite()) {
-            return Err(crate::DredgeError::InvalidParameter {
+            return Err(crate::DredgeError::Param(ParamError {
                 name: "rho_q",
                 value: self.rho_q,
                 reason: "quartz must be denser than the sand bed (rho_q > rho_s)",
-            });
+            }));
         }
         Ok(())
     }

@@ -26,8 +26,9 @@
 //! true cycle. The experiments use streams 0 and 1 of their seed
 //! ([`crate::experiments::CycleConfig`]).
 
-use crate::error::{DredgeError, Result, check_non_negative, check_positive};
+use crate::error::{DredgeError, Result};
 use crate::sedimentation::HopperParams;
+use pf_core::params::{ParamError, non_negative, positive};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -149,79 +150,79 @@ impl SimConfig {
     /// Check that the configuration describes a cycle that can run.
     ///
     /// # Errors
-    /// [`DredgeError::InvalidParameter`] naming the first bad field.
+    /// [`DredgeError::Param`] naming the first bad field.
     pub fn validate(&self) -> Result<()> {
         self.hopper.validate()?;
         let f = &self.inflow;
-        check_positive("q_i_mean", f.q_i_mean)?;
-        check_non_negative("q_i_std", f.q_i_std)?;
-        check_positive("q_i_tau", f.q_i_tau)?;
-        check_non_negative("rho_i_std", f.rho_i_std)?;
-        check_positive("rho_i_tau", f.rho_i_tau)?;
-        check_non_negative("ramp", f.ramp)?;
+        positive("q_i_mean", f.q_i_mean)?;
+        non_negative("q_i_std", f.q_i_std)?;
+        positive("q_i_tau", f.q_i_tau)?;
+        non_negative("rho_i_std", f.rho_i_std)?;
+        positive("rho_i_tau", f.rho_i_tau)?;
+        non_negative("ramp", f.ramp)?;
         if !(f.rho_i_mean >= self.hopper.rho_w && f.rho_i_mean < self.hopper.rho_s) {
-            return Err(DredgeError::InvalidParameter {
+            return Err(DredgeError::Param(ParamError {
                 name: "rho_i_mean",
                 value: f.rho_i_mean,
                 reason: "must lie in [rho_w, rho_s)",
-            });
+            }));
         }
         if !(f.rho_i_max >= f.rho_i_mean && f.rho_i_max < self.hopper.rho_s) {
-            return Err(DredgeError::InvalidParameter {
+            return Err(DredgeError::Param(ParamError {
                 name: "rho_i_max",
                 value: f.rho_i_max,
                 reason: "must lie in [rho_i_mean, rho_s)",
-            });
+            }));
         }
-        check_non_negative("k_p", self.pid.k_p)?;
-        check_non_negative("k_i", self.pid.k_i)?;
-        check_non_negative("k_d", self.pid.k_d)?;
-        check_positive("T_s", self.t_s)?;
+        non_negative("k_p", self.pid.k_p)?;
+        non_negative("k_i", self.pid.k_i)?;
+        non_negative("k_d", self.pid.k_d)?;
+        positive("T_s", self.t_s)?;
         if self.substeps == 0 {
-            return Err(DredgeError::InvalidParameter {
+            return Err(DredgeError::Param(ParamError {
                 name: "substeps",
                 value: 0.0,
                 reason: "at least one Euler step per sampling period",
-            });
+            }));
         }
-        check_positive("t_end", self.t_end)?;
+        positive("t_end", self.t_end)?;
         let samples = self.t_end / self.t_s;
         if samples > 1e7 {
-            return Err(DredgeError::InvalidParameter {
+            return Err(DredgeError::Param(ParamError {
                 name: "t_end",
                 value: self.t_end,
                 reason: "more than 10^7 samples (t_end / T_s)",
-            });
+            }));
         }
         // Each sample takes `substeps` Euler steps: bounded too, or a huge count would run
         // for days instead of failing.
         if samples * self.substeps as f64 > 1e9 {
-            return Err(DredgeError::InvalidParameter {
+            return Err(DredgeError::Param(ParamError {
                 name: "substeps",
                 value: self.substeps as f64,
                 reason: "more than 10^9 Euler steps in all (t_end / T_s · substeps)",
-            });
+            }));
         }
-        check_positive("v_0", self.v_0)?;
-        check_positive("h_o_min", self.h_o_min)?;
+        positive("v_0", self.v_0)?;
+        positive("h_o_min", self.h_o_min)?;
         if !(self.h_o_max > self.h_o_min && self.h_o_max.is_finite()) {
-            return Err(DredgeError::InvalidParameter {
+            return Err(DredgeError::Param(ParamError {
                 name: "h_o_max",
                 value: self.h_o_max,
                 reason: "must be finite and > h_o_min",
-            });
+            }));
         }
         if self.v_0 / self.hopper.area >= self.h_o_max {
-            return Err(DredgeError::InvalidParameter {
+            return Err(DredgeError::Param(ParamError {
                 name: "v_0",
                 value: self.v_0,
                 reason: "the hopper must start below the overflow (v_0 < A h_o_max)",
-            });
+            }));
         }
-        check_positive("m_max", self.m_max)?;
-        check_non_negative("sigma_y[0]", self.sigma_y[0])?;
-        check_non_negative("sigma_y[1]", self.sigma_y[1])?;
-        check_non_negative("h_m_stop", self.h_m_stop)?;
+        positive("m_max", self.m_max)?;
+        non_negative("sigma_y[0]", self.sigma_y[0])?;
+        non_negative("sigma_y[1]", self.sigma_y[1])?;
+        non_negative("h_m_stop", self.h_m_stop)?;
         Ok(())
     }
 }

@@ -4,6 +4,7 @@
 use nalgebra::{DMatrix, DVector};
 use pf_core::kalman::{KalmanState, LinearGaussian};
 use pf_core::mc::stream_rng;
+use pf_core::params::ParamError;
 use pf_dredge::direct::{DirectConfig, direct_computation};
 use pf_dredge::estimator::{
     EstimateConfig, EstimatorConfig, OnlineEstimator, OnlineMean, estimate, run_filter,
@@ -315,7 +316,7 @@ fn the_online_mean_of_runs_matches_the_file_mode() {
     let none = EstimateConfig { runs: 0, ..cfg };
     assert!(matches!(
         OnlineMean::new(&none),
-        Err(DredgeError::InvalidParameter { name: "runs", .. })
+        Err(DredgeError::Param(ParamError { name: "runs", .. }))
     ));
 }
 
@@ -355,7 +356,7 @@ fn bad_inputs_get_their_errors() {
         assert!(
             matches!(
                 seeded(&sim, 7),
-                Err(DredgeError::InvalidParameter { name: n, .. }) if n == name
+                Err(DredgeError::Param(ParamError { name: n, .. })) if n == name
             ),
             "{name}"
         );

@@ -22,6 +22,7 @@ use crate::assignment::Hungarian;
 use crate::energy::{EnergyConfig, EnergyMatrix, TargetGeometry};
 use crate::error::{EpfError, Result};
 use crate::geometry::Vec2;
+use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// Cost of leaving a target without a detection in the global assignment. Every energy is
@@ -75,14 +76,14 @@ impl std::str::FromStr for Association {
 /// `γ = −2 ln(1 − P_G)`: the squared Mahalanobis radius of the gate of probability `P_G`.
 ///
 /// # Errors
-/// [`EpfError::InvalidParameter`] unless `0 < P_G < 1`.
+/// [`EpfError::Param`] unless `0 < P_G < 1`.
 pub fn gate_threshold(p_g: f64) -> Result<f64> {
     if !(p_g > 0.0 && p_g < 1.0) {
-        return Err(EpfError::InvalidParameter {
+        return Err(EpfError::Param(ParamError {
             name: "P_G",
             value: p_g,
             reason: "the gate probability must lie in (0, 1)",
-        });
+        }));
     }
     Ok(-2.0 * (-p_g).ln_1p())
 }

@@ -42,6 +42,7 @@ use crate::geometry::{
     Circle, Vec2, circle_intersection_area, circumcircle, triangle_area, triangle_intersection_area,
 };
 use nalgebra::Matrix2;
+use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// Which prediction E¹ (and the nearest-neighbour baseline) measures distance to.
@@ -96,21 +97,21 @@ impl EnergyConfig {
     /// Check that the configuration can run.
     ///
     /// # Errors
-    /// [`EpfError::InvalidParameter`] for a non-positive or non-finite cap or floor.
+    /// [`EpfError::Param`] for a non-positive or non-finite cap or floor.
     pub fn validate(&self) -> Result<()> {
         if !(self.radius_cap > 0.0 && self.radius_cap.is_finite()) {
-            return Err(EpfError::InvalidParameter {
+            return Err(EpfError::Param(ParamError {
                 name: "radius_cap",
                 value: self.radius_cap,
                 reason: "must be a positive finite multiple of the triangle's longest side",
-            });
+            }));
         }
         if !(self.e3_floor > 0.0 && self.e3_floor <= 1.0) {
-            return Err(EpfError::InvalidParameter {
+            return Err(EpfError::Param(ParamError {
                 name: "e3_floor",
                 value: self.e3_floor,
                 reason: "must lie in (0, 1]",
-            });
+            }));
         }
         Ok(())
     }

@@ -1,6 +1,7 @@
 //! The crate's error type: every variant says what was wrong and where.
 
 use pf_core::CoreError;
+use pf_core::params::ParamError;
 use thiserror::Error;
 
 /// Errors of pf-epf. Input errors name the row, target or frame at fault.
@@ -10,16 +11,9 @@ pub enum EpfError {
     /// An engine error (filter degeneracy, bad filter configuration, metric input).
     #[error(transparent)]
     Core(#[from] CoreError),
-    /// A configuration parameter is outside its valid range.
-    #[error("invalid parameter {name} = {}: {reason}", pf_core::error::Shown(*value))]
-    InvalidParameter {
-        /// Parameter name, as the paper writes it where possible.
-        name: &'static str,
-        /// The offending value.
-        value: f64,
-        /// What the valid range is.
-        reason: &'static str,
-    },
+    /// A parameter is outside its valid range (see [`pf_core::params`]).
+    #[error(transparent)]
+    Param(#[from] ParamError),
     /// A detection or init row holds a NaN or infinite coordinate.
     #[error("non-finite {what} {value} in {file} row {row}")]
     NonFiniteData {

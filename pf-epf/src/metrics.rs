@@ -9,6 +9,7 @@ use crate::geometry::Vec2;
 use crate::scenario::Simulation;
 use crate::tracker::TrackResult;
 use pf_core::metrics::{RecCurve, rec_curve, rmse};
+use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// `‖X̂_{k,t} − X_{k,t}‖` per target (rows, in init order) and tracked frame (columns).
@@ -102,21 +103,21 @@ pub fn association_errors(result: &TrackResult, detections: &Detections) -> Asso
 /// and larger set sizes (0 when both are empty).
 ///
 /// # Errors
-/// [`EpfError::InvalidParameter`] unless `c > 0` and `p ≥ 1`.
+/// [`EpfError::Param`] unless `c > 0` and `p ≥ 1`.
 pub fn ospa(x: &[Vec2], y: &[Vec2], c: f64, p: f64, h: &mut Hungarian) -> Result<f64> {
     if !(c > 0.0 && c.is_finite()) {
-        return Err(EpfError::InvalidParameter {
+        return Err(EpfError::Param(ParamError {
             name: "c",
             value: c,
             reason: "the OSPA cut-off must be positive and finite",
-        });
+        }));
     }
     if !(p >= 1.0 && p.is_finite()) {
-        return Err(EpfError::InvalidParameter {
+        return Err(EpfError::Param(ParamError {
             name: "p",
             value: p,
             reason: "the OSPA order must be at least 1",
-        });
+        }));
     }
     let (a, b) = if x.len() <= y.len() { (x, y) } else { (y, x) };
     let (m, n) = (a.len(), b.len());

@@ -180,7 +180,7 @@ mod tests {
         }
         let n = 4000;
         let cfg = FilterConfig::new(n);
-        let mut pf = ParticleFilter::new(model, OptimalProposal, cfg.resampler, cfg).unwrap();
+        let mut pf = ParticleFilter::new(model, OptimalProposal, cfg).unwrap();
         let mut rng = stream_rng(3, 0);
         pf.step(None, None, &mut rng).unwrap();
         for y in &ys {

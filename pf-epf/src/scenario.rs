@@ -13,6 +13,7 @@
 use crate::data::{Detection, Detections, Init, InitRow};
 use crate::error::{EpfError, Result};
 use crate::geometry::Vec2;
+use pf_core::params::ParamError;
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, Normal, Poisson, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -99,22 +100,22 @@ impl ScenarioConfig {
     /// Check the rates.
     ///
     /// # Errors
-    /// [`EpfError::InvalidParameter`] for a clutter rate outside `[0, 10⁴]` or a miss
+    /// [`EpfError::Param`] for a clutter rate outside `[0, 10⁴]` or a miss
     /// probability outside `[0, 1)`.
     pub fn validate(&self) -> Result<()> {
         if !(self.clutter >= 0.0 && self.clutter <= MAX_CLUTTER) {
-            return Err(EpfError::InvalidParameter {
+            return Err(EpfError::Param(ParamError {
                 name: "clutter",
                 value: self.clutter,
                 reason: "the mean clutter per frame must lie in [0, 10⁴]",
-            });
+            }));
         }
         if !(self.miss >= 0.0 && self.miss < 1.0) {
-            return Err(EpfError::InvalidParameter {
+            return Err(EpfError::Param(ParamError {
                 name: "miss",
                 value: self.miss,
                 reason: "the miss probability must lie in [0, 1)",
-            });
+            }));
         }
         Ok(())
     }
@@ -243,13 +244,13 @@ pub fn simulate<R: Rng + ?Sized>(cfg: &ScenarioConfig, rng: &mut R) -> Result<Si
     hi += Vec2::repeat(3.0);
     let noise = Normal::new(0.0, sc.noise()).expect("positive noise");
     let clutter = if cfg.clutter > 0.0 {
-        Some(
-            Poisson::new(cfg.clutter).map_err(|_| EpfError::InvalidParameter {
+        Some(Poisson::new(cfg.clutter).map_err(|_| {
+            EpfError::Param(ParamError {
                 name: "clutter",
                 value: cfg.clutter,
                 reason: "not a Poisson rate",
-            })?,
-        )
+            })
+        })?)
     } else {
         None
     };

@@ -25,6 +25,7 @@ use crate::model::{Drift, OptimalProposal, TargetModel};
 use nalgebra::Matrix2;
 use pf_core::filter::{EssThreshold, FilterConfig, ParticleFilter, ResamplePolicy};
 use pf_core::gaussian::{ErrorEllipse, error_ellipse};
+use pf_core::params::ParamError;
 use pf_core::resample::Resampler;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -78,14 +79,14 @@ impl TrackerConfig {
     /// Check that the configuration can run.
     ///
     /// # Errors
-    /// [`EpfError::InvalidParameter`] naming the parameter.
+    /// [`EpfError::Param`] naming the parameter.
     pub fn validate(&self) -> Result<()> {
         let bad = |name, value, reason| {
-            Err(EpfError::InvalidParameter {
+            Err(EpfError::Param(ParamError {
                 name,
                 value,
                 reason,
-            })
+            }))
         };
         if self.n_particles == 0 {
             return bad("N", 0.0, "at least one particle per target");
@@ -163,7 +164,7 @@ pub enum Record {
     Particles,
 }
 
-type TargetFilter = ParticleFilter<TargetModel, OptimalProposal, Resampler>;
+type TargetFilter = ParticleFilter<TargetModel, OptimalProposal>;
 
 /// One target's filter and dynamic model.
 struct TargetState {
@@ -231,7 +232,7 @@ impl Tracker {
                 q: cfg.q,
                 r: cfg.r,
             };
-            let mut pf = ParticleFilter::new(model, OptimalProposal, fc.resampler, fc)?;
+            let mut pf = ParticleFilter::new(model, OptimalProposal, fc)?;
             pf.step(None, None, rng)?;
             targets.push(TargetState {
                 pf,

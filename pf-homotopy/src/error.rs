@@ -1,5 +1,6 @@
 //! The crate's error type: every variant says what went wrong and where (sample `k`, `λ`).
 
+use pf_core::params::ParamError;
 use thiserror::Error;
 
 /// Errors of pf-homotopy.
@@ -9,16 +10,9 @@ pub enum HomotopyError {
     /// An error of the engine (a non-positive-definite covariance, degenerate weights …).
     #[error(transparent)]
     Core(#[from] pf_core::CoreError),
-    /// A configuration value is outside its valid range.
-    #[error("invalid parameter {name} = {}: {reason}", pf_core::error::Shown(*value))]
-    InvalidParameter {
-        /// Parameter name, as the paper writes it where possible.
-        name: &'static str,
-        /// The offending value.
-        value: f64,
-        /// The valid range.
-        reason: &'static str,
-    },
+    /// A parameter is outside its valid range (see [`pf_core::params`]).
+    #[error(transparent)]
+    Param(#[from] ParamError),
     /// An input value (bearing, observer position, prior moment) is NaN or infinite.
     #[error("non-finite {what} at sample {k}: {value}")]
     NonFiniteData {
@@ -85,19 +79,6 @@ pub enum HomotopyError {
 /// Result alias for pf-homotopy.
 pub type Result<T, E = HomotopyError> = std::result::Result<T, E>;
 
-/// Reject a non-finite or non-positive value of parameter `name`.
-pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<()> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(HomotopyError::InvalidParameter {
-            name,
-            value,
-            reason: "must be positive and finite",
-        })
-    }
-}
-
 /// Reject a non-finite data value: element `k` of `what` (a bearing `y_k`, an observer
 /// state, a mean).
 pub(crate) fn check_data(what: &'static str, k: usize, value: f64) -> Result<()> {
@@ -105,18 +86,5 @@ pub(crate) fn check_data(what: &'static str, k: usize, value: f64) -> Result<()>
         Ok(())
     } else {
         Err(HomotopyError::NonFiniteData { what, k, value })
-    }
-}
-
-/// Reject a non-finite value of parameter `name`.
-pub(crate) fn check_finite(name: &'static str, value: f64) -> Result<()> {
-    if value.is_finite() {
-        Ok(())
-    } else {
-        Err(HomotopyError::InvalidParameter {
-            name,
-            value,
-            reason: "must be finite",
-        })
     }
 }

@@ -17,8 +17,9 @@ use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{HomotopyError, Result, check_data, check_finite, check_positive};
+use crate::error::{HomotopyError, Result, check_data};
 use pf_core::geometry::wrap_angle;
+use pf_core::params::{ParamError, finite, positive};
 
 /// The target state `[x, y, ẋ, ẏ]`.
 pub type State = Vector4<f64>;
@@ -58,12 +59,13 @@ impl Default for PriorConfig {
 impl PriorConfig {
     /// Check the prior.
     pub fn validate(&self) -> Result<()> {
-        check_positive("range_mean", self.range_mean)?;
-        check_positive("range_sd", self.range_sd)?;
-        check_finite("speed_mean", self.speed_mean)?;
-        check_positive("speed_sd", self.speed_sd)?;
-        check_finite("heading_mean", self.heading_mean)?;
-        check_positive("heading_sd", self.heading_sd)
+        positive("range_mean", self.range_mean)?;
+        positive("range_sd", self.range_sd)?;
+        finite("speed_mean", self.speed_mean)?;
+        positive("speed_sd", self.speed_sd)?;
+        finite("heading_mean", self.heading_mean)?;
+        positive("heading_sd", self.heading_sd)?;
+        Ok(())
     }
 }
 
@@ -136,22 +138,22 @@ pub struct ObserverState {
 impl ScenarioConfig {
     /// Check the scenario.
     pub fn validate(&self) -> Result<()> {
-        check_positive("target_range", self.target_range)?;
-        check_finite("target_bearing_deg", self.target_bearing_deg)?;
-        check_finite("target_speed", self.target_speed)?;
-        check_finite("target_heading_deg", self.target_heading_deg)?;
-        check_positive("q", self.q)?;
-        check_positive("T", self.t)?;
-        check_finite("observer_speed", self.observer_speed)?;
-        check_finite("observer_heading_deg", self.observer_heading_deg)?;
-        check_finite("turn_rate_deg", self.turn_rate_deg)?;
-        check_positive("sigma_deg", self.sigma_deg)?;
+        positive("target_range", self.target_range)?;
+        finite("target_bearing_deg", self.target_bearing_deg)?;
+        finite("target_speed", self.target_speed)?;
+        finite("target_heading_deg", self.target_heading_deg)?;
+        positive("q", self.q)?;
+        positive("T", self.t)?;
+        finite("observer_speed", self.observer_speed)?;
+        finite("observer_heading_deg", self.observer_heading_deg)?;
+        finite("turn_rate_deg", self.turn_rate_deg)?;
+        positive("sigma_deg", self.sigma_deg)?;
         if self.turn_start < 1 || self.turn_end < self.turn_start {
-            return Err(HomotopyError::InvalidParameter {
+            return Err(HomotopyError::Param(ParamError {
                 name: "turn_start/turn_end",
                 value: self.turn_start as f64,
                 reason: "need 1 ≤ turn_start ≤ turn_end",
-            });
+            }));
         }
         if self.n_samples < 2 {
             return Err(HomotopyError::TooFewObservations {
@@ -261,11 +263,11 @@ impl ScenarioConfig {
         let lq = self
             .q_matrix()
             .cholesky()
-            .ok_or(HomotopyError::InvalidParameter {
+            .ok_or(HomotopyError::Param(ParamError {
                 name: "q",
                 value: self.q,
                 reason: "Q must be positive definite",
-            })?
+            }))?
             .l();
         let observer = self.observer_track();
         let sigma = self.sigma();

@@ -43,6 +43,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{HomotopyError, Result};
 use crate::param::{Derivatives, Gaussian, Moments};
 use crate::quadrature::{Nodes, TemperedQuadrature};
+use pf_core::params::ParamError;
 
 /// How the λ-ODE (12) is integrated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -103,11 +104,11 @@ impl LambdaGrid {
     pub fn validate(&self) -> Result<()> {
         const WHAT: &str = "m (λ steps)";
         if self.steps == 0 {
-            return Err(HomotopyError::InvalidParameter {
+            return Err(HomotopyError::Param(ParamError {
                 name: WHAT,
                 value: 0.0,
                 reason: "at least one λ step is needed",
-            });
+            }));
         }
         // The m + 1 nodes are a vector: a count past the limit or the machine's memory is an
         // error here, not an aborted allocation in `nodes`.
@@ -116,11 +117,11 @@ impl LambdaGrid {
         if let Spacing::Geometric { ratio } = self.spacing
             && !(ratio.is_finite() && ratio > 1.0)
         {
-            return Err(HomotopyError::InvalidParameter {
+            return Err(HomotopyError::Param(ParamError {
                 name: "geometric λ ratio",
                 value: ratio,
                 reason: "must be finite and > 1",
-            });
+            }));
         }
         Ok(())
     }

@@ -23,6 +23,7 @@
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 use crate::error::{Result, check_data};
+use pf_core::gaussian::LN_2PI;
 
 /// A `D`-variate Gaussian `N(μ, Σ)`: the density family `f(·; θ)`.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -285,7 +286,7 @@ pub(crate) fn log_normal<const D: usize>(
     ln_det: f64,
 ) -> f64 {
     let e = p - mu;
-    -0.5 * (D as f64 * (2.0 * std::f64::consts::PI).ln() + ln_det + e.dot(&(lambda_mat * e)))
+    -0.5 * (D as f64 * LN_2PI + ln_det + e.dot(&(lambda_mat * e)))
 }
 
 #[cfg(test)]

@@ -18,12 +18,12 @@
 use nalgebra::{SMatrix, SVector, Vector2};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{HomotopyError, Result, check_positive};
+use crate::error::{HomotopyError, Result};
 use crate::param::{Gaussian, log_normal};
+use pf_core::gaussian::LN_2PI;
 use pf_core::geometry::wrap_angle;
+use pf_core::params::{ParamError, positive};
 use pf_core::simd::math::exp_nonpositive;
-
-const LN_2PI: f64 = 1.837_877_066_409_345_5;
 
 /// Quadrature nodes, reused from one call to the next (no allocation once grown).
 #[derive(Debug, Clone, Default)]
@@ -150,18 +150,18 @@ impl PolarGridConfig {
     /// Check the resolution.
     pub fn validate(&self) -> Result<()> {
         if self.n_bearing < 2 {
-            return Err(HomotopyError::InvalidParameter {
+            return Err(HomotopyError::Param(ParamError {
                 name: "n_bearing",
                 value: self.n_bearing as f64,
                 reason: "the bearing grid needs at least 2 nodes",
-            });
+            }));
         }
         if self.n_range < 2 {
-            return Err(HomotopyError::InvalidParameter {
+            return Err(HomotopyError::Param(ParamError {
                 name: "n_range",
                 value: self.n_range as f64,
                 reason: "the range grid needs at least 2 nodes",
-            });
+            }));
         }
         // Each node holds a point and three weights, about 64 bytes in the plane's 4-D
         // state: a grid past the count limit or the machine's memory is an error here.
@@ -169,7 +169,8 @@ impl PolarGridConfig {
         let nodes =
             pf_core::limits::check_count(WHAT, self.n_bearing.saturating_mul(self.n_range))?;
         pf_core::limits::check_memory(WHAT, nodes, nodes.saturating_mul(64))?;
-        check_positive("n_sigma", self.n_sigma)
+        positive("n_sigma", self.n_sigma)?;
+        Ok(())
     }
 }
 

@@ -5,6 +5,7 @@ use nalgebra::DMatrix;
 use nalgebra::{Matrix2, Matrix4, Vector2, Vector4};
 use pf_core::geometry::wrap_angle;
 use pf_core::mc::stream_rng;
+use pf_core::params::ParamError;
 use pf_core::{Proposal, StateSpaceModel, StepAt, TransitionDensity};
 use pf_homotopy::HomotopyError;
 use pf_homotopy::filters::pf::{BotModel, LinearisedOptimal};
@@ -205,10 +206,10 @@ fn invalid_inputs_are_errors_not_panics() {
     };
     assert!(matches!(
         sc.validate(),
-        Err(HomotopyError::InvalidParameter {
+        Err(HomotopyError::Param(ParamError {
             name: "sigma_deg",
             ..
-        })
+        }))
     ));
     let sc = ScenarioConfig {
         n_samples: 1,
@@ -242,7 +243,7 @@ fn invalid_inputs_are_errors_not_panics() {
     };
     assert!(matches!(
         pf_homotopy::experiments::ellipses(&cfg),
-        Err(HomotopyError::InvalidParameter { .. })
+        Err(HomotopyError::Param(_))
     ));
     // Sizes no machine holds are errors before anything is allocated or run: the λ grid,
     // the polar grid, the number of instants.

@@ -4,6 +4,7 @@
 use crate::calibrate::Calibration;
 use crate::complexity::{CtCase, ef_cost};
 use crate::error::{MpfError, Result};
+use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// What to advise on.
@@ -42,40 +43,40 @@ impl AdviseConfig {
     /// `p = 0`, both or neither of budget and particles, a bad budget, zero particles.
     pub fn validate(&self) -> Result<()> {
         if self.p == 0 {
-            return Err(MpfError::InvalidParameter {
+            return Err(MpfError::Param(ParamError {
                 name: "p",
                 value: 0.0,
                 reason: "at least one state must be in the PF",
-            });
+            }));
         }
         // One option per k is weighed, so the dimensions bound the work; a million state
         // components is far beyond what the flop model (eqs. (11)-(12)) was fitted for.
         if self.p.saturating_add(self.k) > MAX_DIMENSION {
-            return Err(MpfError::InvalidParameter {
+            return Err(MpfError::Param(ParamError {
                 name: "p + k",
                 value: self.p.saturating_add(self.k) as f64,
                 reason: "the state may have at most 10⁶ components",
-            });
+            }));
         }
         if let Some(n) = self.particles {
             pf_core::limits::check_count("particles", n)?;
         }
         match (self.budget_s, self.particles) {
-            (Some(b), None) if !(b.is_finite() && b > 0.0) => Err(MpfError::InvalidParameter {
+            (Some(b), None) if !(b.is_finite() && b > 0.0) => Err(MpfError::Param(ParamError {
                 name: "budget_s",
                 value: b,
                 reason: "must be positive and finite",
-            }),
-            (None, Some(0)) => Err(MpfError::InvalidParameter {
+            })),
+            (None, Some(0)) => Err(MpfError::Param(ParamError {
                 name: "particles",
                 value: 0.0,
                 reason: "must be at least 1",
-            }),
-            (Some(_), Some(_)) | (None, None) => Err(MpfError::InvalidParameter {
+            })),
+            (Some(_), Some(_)) | (None, None) => Err(MpfError::Param(ParamError {
                 name: "budget_s/particles",
                 value: f64::NAN,
                 reason: "give exactly one of a time budget and a particle count",
-            }),
+            })),
             _ => Ok(()),
         }
     }
@@ -132,11 +133,11 @@ pub fn advise(cfg: &AdviseConfig, calibration: &Calibration) -> Result<Advice> {
                     continue;
                 }
                 if n > pf_core::limits::MAX_COUNT as f64 {
-                    return Err(MpfError::InvalidParameter {
+                    return Err(MpfError::Param(ParamError {
                         name: "budget_s",
                         value: cfg.budget_s.unwrap_or(f64::NAN),
                         reason: "the budget allows more than 2³² particles",
-                    });
+                    }));
                 }
                 n as usize
             }

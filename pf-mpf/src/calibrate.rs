@@ -9,6 +9,7 @@ use crate::radar::{RadarObs, RangeAzimuth};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat};
 use nalgebra::SVector;
+use pf_core::params::{self, ParamError};
 use pf_core::resample::{Resample, Resampler};
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -61,26 +62,20 @@ impl CalibrateConfig {
         n.sort_unstable();
         n.dedup();
         if n.len() < 2 || n[0] == 0 {
-            return Err(MpfError::InvalidParameter {
+            return Err(MpfError::Param(ParamError {
                 name: "n_values",
                 value: n.len() as f64,
                 reason: "need at least two distinct positive particle counts for a regression",
-            });
+            }));
         }
         if self.dims.is_empty() || self.dims.contains(&0) {
-            return Err(MpfError::InvalidParameter {
+            return Err(MpfError::Param(ParamError {
                 name: "dims",
                 value: self.dims.len() as f64,
                 reason: "need at least one positive matrix size",
-            });
+            }));
         }
-        if self.reps == 0 {
-            return Err(MpfError::InvalidParameter {
-                name: "reps",
-                value: 0.0,
-                reason: "must be at least 1",
-            });
-        }
+        params::at_least_one("reps", self.reps)?;
         Ok(())
     }
 }
@@ -111,7 +106,7 @@ impl Calibration {
     /// Check every field is positive and finite.
     ///
     /// # Errors
-    /// [`MpfError::InvalidParameter`] naming the field.
+    /// [`MpfError::Param`] naming the field.
     pub fn validate(&self) -> Result<()> {
         for (name, v) in [
             ("flop_ns", self.flop_ns),
@@ -119,13 +114,7 @@ impl Calibration {
             ("c2", self.c2),
             ("c3", self.c3),
         ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(MpfError::InvalidParameter {
-                    name,
-                    value: v,
-                    reason: "must be positive and finite",
-                });
-            }
+            params::positive(name, v)?;
         }
         Ok(())
     }

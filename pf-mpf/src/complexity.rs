@@ -5,7 +5,7 @@
 //! particle is expressed in flops of equal time (Definition 1) through the coefficients
 //! `c1` (likelihood), `c2` (resampling) and `c3` (one random number).
 
-use crate::error::{MpfError, Result};
+use crate::error::Result;
 use serde::{Deserialize, Serialize};
 
 /// The EF coefficients `c1`, `c2`, `c3`.
@@ -35,16 +35,10 @@ impl EfCoefficients {
     /// Check that every coefficient is finite and non-negative.
     ///
     /// # Errors
-    /// [`MpfError::InvalidParameter`] naming the coefficient.
+    /// [`MpfError::Param`](crate::MpfError::Param) naming the coefficient.
     pub fn validate(&self) -> Result<()> {
         for (name, v) in [("c1", self.c1), ("c2", self.c2), ("c3", self.c3)] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(MpfError::InvalidParameter {
-                    name,
-                    value: v,
-                    reason: "EF coefficients must be finite and non-negative",
-                });
-            }
+            pf_core::params::non_negative(name, v)?;
         }
         Ok(())
     }

@@ -1,6 +1,7 @@
 //! The crate's error type: every variant says what went wrong and where.
 
 use pf_core::CoreError;
+use pf_core::params::ParamError;
 use thiserror::Error;
 
 /// Errors returned by pf-mpf.
@@ -18,16 +19,9 @@ pub enum MpfError {
         /// Why it was rejected.
         reason: &'static str,
     },
-    /// A parameter outside its valid range.
-    #[error("invalid parameter {name} = {}: {reason}", pf_core::error::Shown(*value))]
-    InvalidParameter {
-        /// The parameter, named as in the paper where possible.
-        name: &'static str,
-        /// The offending value.
-        value: f64,
-        /// The valid range.
-        reason: &'static str,
-    },
+    /// A parameter is outside its valid range (see [`pf_core::params`]).
+    #[error(transparent)]
+    Param(#[from] ParamError),
     /// Alg. 1 (one Riccati recursion shared by all particles) was asked for, but `C_t ≠ 0`.
     #[error("Alg. 1 shares one Riccati recursion and needs C_t = 0, but max |C_t| = {max_abs}")]
     SharedRiccatiNeedsZeroC {

@@ -15,6 +15,8 @@
 
 use crate::error::{MpfError, Result};
 use nalgebra::{Cholesky, SMatrix, SVector};
+use pf_core::gaussian::LN_2PI;
+use pf_core::params::ParamError;
 use pf_core::{CoreError, StateSpaceModel};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -43,15 +45,14 @@ impl<const P: usize, const NY: usize> Measurement<P, NY> for LinearMeasurement<P
     }
 }
 
-/// Gaussian `N(mean, cov)` with its lower Cholesky factor, computed once.
+/// Gaussian `N(mean, cov)` with its lower Cholesky factor, computed once: the fields are
+/// private so that the factor always belongs to the covariance.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FactoredGaussian<const D: usize> {
-    /// Mean.
-    pub mean: SVector<f64, D>,
-    /// Covariance.
-    pub cov: SMatrix<f64, D, D>,
+    mean: SVector<f64, D>,
+    cov: SMatrix<f64, D, D>,
     /// Lower Cholesky factor of `cov`.
-    pub chol: SMatrix<f64, D, D>,
+    chol: SMatrix<f64, D, D>,
 }
 
 impl<const D: usize> FactoredGaussian<D> {
@@ -64,6 +65,21 @@ impl<const D: usize> FactoredGaussian<D> {
         check_finite(what, mean.as_slice())?;
         let chol = spd_chol(what, &cov)?;
         Ok(Self { mean, cov, chol })
+    }
+
+    /// The mean.
+    pub fn mean(&self) -> &SVector<f64, D> {
+        &self.mean
+    }
+
+    /// The covariance.
+    pub fn cov(&self) -> &SMatrix<f64, D, D> {
+        &self.cov
+    }
+
+    /// The lower Cholesky factor `L` of the covariance, `L Lᵀ = cov`.
+    pub fn chol(&self) -> &SMatrix<f64, D, D> {
+        &self.chol
     }
 
     /// Draw `mean + L z`, `z` from `D` standard normals in order.
@@ -90,11 +106,11 @@ pub(crate) fn spd_chol<const D: usize>(
         for i in (j + 1)..D {
             let gap = m[(i, j)] - m[(j, i)];
             if gap.abs() > 1e-10 * scale {
-                return Err(CoreError::InvalidParameter {
+                return Err(CoreError::Param(ParamError {
                     name: what,
                     value: gap,
                     reason: "covariance must be symmetric (value is M_ij − M_ji)",
-                }
+                })
                 .into());
             }
         }
@@ -110,32 +126,35 @@ pub(crate) fn spd_chol<const D: usize>(
 }
 
 /// Model (5) with time-invariant matrices and a nonlinear measurement `H`.
+///
+/// Built and validated once by [`new`](Self::new), which also factors the covariances; the
+/// fields are private and read through getters, so a factor never goes stale.
 #[derive(Debug, Clone)]
 pub struct MixedLinearGaussian<const P: usize, const K: usize, const NY: usize, H> {
     /// `A^p` (p×p).
-    pub a_p: SMatrix<f64, P, P>,
+    a_p: SMatrix<f64, P, P>,
     /// `A^k` (p×k).
-    pub a_k: SMatrix<f64, P, K>,
+    a_k: SMatrix<f64, P, K>,
     /// `F^p` (k×p).
-    pub f_p: SMatrix<f64, K, P>,
+    f_p: SMatrix<f64, K, P>,
     /// `F^k` (k×k).
-    pub f_k: SMatrix<f64, K, K>,
+    f_k: SMatrix<f64, K, K>,
     /// `Q^p`.
-    pub q_p: SMatrix<f64, P, P>,
+    q_p: SMatrix<f64, P, P>,
     /// `Q^k`.
-    pub q_k: SMatrix<f64, K, K>,
+    q_k: SMatrix<f64, K, K>,
     /// `C_t` (ny×k).
-    pub c: SMatrix<f64, NY, K>,
+    c: SMatrix<f64, NY, K>,
     /// `e ~ N(0, R)`, factored.
-    pub e: FactoredGaussian<NY>,
+    e: FactoredGaussian<NY>,
     /// `x^p_0 ~ p_{x_0^p}`, a Gaussian here.
-    pub x0_p: FactoredGaussian<P>,
-    /// `x̄^k_0` and `P̄_0` of Alg. 1, step 1.
-    pub x0_k: SVector<f64, K>,
+    x0_p: FactoredGaussian<P>,
+    /// `x̄^k_0` of Alg. 1, step 1.
+    x0_k: SVector<f64, K>,
     /// `P̄_0`.
-    pub p0_k: SMatrix<f64, K, K>,
+    p0_k: SMatrix<f64, K, K>,
     /// `h_t`.
-    pub h: H,
+    h: H,
     /// `½ log det(2πR)`, for the `C_t = 0` likelihood.
     half_log_det_2pi_r: f64,
     /// Lower factor of `Q^p`, for the standard PF (k = 0) view.
@@ -169,6 +188,64 @@ pub struct Model5Matrices<const P: usize, const K: usize, const NY: usize> {
     pub x0_k: SVector<f64, K>,
     /// `P̄_0`.
     pub p0_k: SMatrix<f64, K, K>,
+}
+
+/// Read access: the matrices of model (5) as built, and the factored laws.
+impl<const P: usize, const K: usize, const NY: usize, H> MixedLinearGaussian<P, K, NY, H> {
+    /// `A^p` (p×p), eq. (5a).
+    pub fn a_p(&self) -> &SMatrix<f64, P, P> {
+        &self.a_p
+    }
+
+    /// `A^k` (p×k), eq. (5a).
+    pub fn a_k(&self) -> &SMatrix<f64, P, K> {
+        &self.a_k
+    }
+
+    /// `F^p` (k×p), eq. (5b).
+    pub fn f_p(&self) -> &SMatrix<f64, K, P> {
+        &self.f_p
+    }
+
+    /// `F^k` (k×k), eq. (5b).
+    pub fn f_k(&self) -> &SMatrix<f64, K, K> {
+        &self.f_k
+    }
+
+    /// `Q^p`, the covariance of `w^p`, eq. (5a).
+    pub fn q_p(&self) -> &SMatrix<f64, P, P> {
+        &self.q_p
+    }
+
+    /// `Q^k`, the covariance of `w^k`, eq. (5b).
+    pub fn q_k(&self) -> &SMatrix<f64, K, K> {
+        &self.q_k
+    }
+
+    /// `C_t` (ny×k), eq. (5c).
+    pub fn c(&self) -> &SMatrix<f64, NY, K> {
+        &self.c
+    }
+
+    /// The law of `x^p_0`, factored.
+    pub fn x0_p(&self) -> &FactoredGaussian<P> {
+        &self.x0_p
+    }
+
+    /// `x̄^k_0` of Alg. 1, step 1.
+    pub fn x0_k(&self) -> &SVector<f64, K> {
+        &self.x0_k
+    }
+
+    /// `P̄_0` of Alg. 1, step 1.
+    pub fn p0_k(&self) -> &SMatrix<f64, K, K> {
+        &self.p0_k
+    }
+
+    /// The measurement function `h_t`, eq. (5c).
+    pub fn h(&self) -> &H {
+        &self.h
+    }
 }
 
 impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>>
@@ -237,7 +314,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>>
 /// `½ log det(2π L Lᵀ)`.
 pub(crate) fn half_log_det_2pi<const D: usize>(l: &SMatrix<f64, D, D>) -> f64 {
     let log_diag: f64 = (0..D).map(|i| l[(i, i)].ln()).sum();
-    log_diag + 0.5 * D as f64 * (2.0 * std::f64::consts::PI).ln()
+    log_diag + 0.5 * D as f64 * LN_2PI
 }
 
 /// `log N(e; 0, L Lᵀ)` given `½ log det(2π L Lᵀ)`.
@@ -297,4 +374,73 @@ pub fn check_observations<const NY: usize>(ys: &[Option<SVector<f64, NY>>]) -> R
         }
     }
     Ok(n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The getters give back what was built, and each factor belongs to its covariance:
+    /// `L Lᵀ` is the covariance it was computed from.
+    #[test]
+    fn factors_belong_to_their_covariances() {
+        let q_p = SMatrix::<f64, 2, 2>::new(2.0, 0.5, 0.5, 1.0);
+        let r = SMatrix::<f64, 1, 1>::new(0.25);
+        let p0_p = SMatrix::<f64, 2, 2>::new(4.0, -1.0, -1.0, 3.0);
+        let m = Model5Matrices::<2, 1, 1> {
+            a_p: SMatrix::identity(),
+            a_k: SMatrix::from_element(0.1),
+            f_p: SMatrix::zeros(),
+            f_k: SMatrix::identity(),
+            q_p,
+            q_k: SMatrix::identity(),
+            c: SMatrix::zeros(),
+            r,
+            x0_p: SVector::<f64, 2>::new(1.0, -1.0),
+            p0_p,
+            x0_k: SVector::zeros(),
+            p0_k: SMatrix::identity(),
+        };
+        let h = LinearMeasurement {
+            h: SMatrix::<f64, 1, 2>::new(1.0, 0.0),
+        };
+        let model = MixedLinearGaussian::new(m, h).unwrap();
+        assert_eq!(model.q_p(), &q_p);
+        assert_eq!(model.r(), &r);
+        assert_eq!(model.a_k(), &SMatrix::<f64, 2, 1>::from_element(0.1));
+        assert_eq!(model.x0_p().mean(), &SVector::<f64, 2>::new(1.0, -1.0));
+        assert_eq!(model.x0_p().cov(), &p0_p);
+        let l = model.x0_p().chol();
+        assert!((l * l.transpose() - p0_p).amax() < 1e-12);
+        assert!((model.chol_q_p * model.chol_q_p.transpose() - q_p).amax() < 1e-12);
+        // A covariance that is not positive definite is refused, naming it.
+        let bad = Model5Matrices {
+            q_p: SMatrix::<f64, 2, 2>::new(1.0, 2.0, 2.0, 1.0),
+            ..Model5Matrices {
+                a_p: SMatrix::identity(),
+                a_k: SMatrix::zeros(),
+                f_p: SMatrix::zeros(),
+                f_k: SMatrix::identity(),
+                q_p,
+                q_k: SMatrix::identity(),
+                c: SMatrix::zeros(),
+                r,
+                x0_p: SVector::zeros(),
+                p0_p,
+                x0_k: SVector::zeros(),
+                p0_k: SMatrix::identity(),
+            }
+        };
+        let h = LinearMeasurement {
+            h: SMatrix::<f64, 1, 2>::new(1.0, 0.0),
+        };
+        let e = MixedLinearGaussian::<2, 1, 1, _>::new(bad, h).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                MpfError::Core(CoreError::NotPositiveDefinite { what: "Q^p", .. })
+            ),
+            "{e}"
+        );
+    }
 }

@@ -27,6 +27,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef};
 use nalgebra::{Cholesky, SMatrix, SVector, SVectorView};
 use pf_core::filter::StepReport;
+use pf_core::params::ParamError;
 use pf_core::resample::{Resample, Resampler};
 use pf_core::weights;
 use rand::Rng;
@@ -84,11 +85,11 @@ impl MpfConfig {
     /// `N = 0`, or `N` above [`MAX_COUNT`](pf_core::limits::MAX_COUNT).
     pub fn validate(&self) -> Result<()> {
         if self.n_particles == 0 {
-            return Err(MpfError::InvalidParameter {
+            return Err(MpfError::Param(ParamError {
                 name: "N",
                 value: 0.0,
                 reason: "the number of particles must be at least 1",
-            });
+            }));
         }
         pf_core::limits::check_count("the number of particles N", self.n_particles)?;
         Ok(())
@@ -184,7 +185,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf
             Riccati::Shared => {
                 if !model.c_is_zero() {
                     return Err(MpfError::SharedRiccatiNeedsZeroC {
-                        max_abs: model.c.amax(),
+                        max_abs: model.c().amax(),
                     });
                 }
                 true
@@ -380,12 +381,12 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf
     /// Alg. 1, step 1: `x^{p,(i)}_0 ~ p(x^p_0)`, `{x̂^k, P} = {x̄^k_0, P̄_0}`.
     fn initialise<R: Rng + ?Sized>(&mut self, rng: &mut R) {
         for i in 0..self.n {
-            let x = self.model.x0_p.sample(rng);
+            let x = self.model.x0_p().sample(rng);
             set_col(&mut self.xp, i, &x);
-            set_col(&mut self.xk, i, &self.model.x0_k);
+            set_col(&mut self.xk, i, self.model.x0_k());
             self.ancestors[i] = i;
         }
-        self.pk.fill(self.model.p0_k);
+        self.pk.fill(*self.model.p0_k());
     }
 
     /// Copy the resampled particles, KF means and covariances into the `_r` buffers.
@@ -418,7 +419,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf
         matmul(
             block_mut(&mut self.t3, P, n),
             Accum::Replace,
-            view(&m.a_p),
+            view(m.a_p()),
             xp_r,
             1.0,
             par,
@@ -426,7 +427,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf
         matmul(
             block_mut(&mut self.t4, P, n),
             Accum::Replace,
-            view(&m.a_k),
+            view(m.a_k()),
             xk_r,
             1.0,
             par,
@@ -434,7 +435,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf
         matmul(
             block_mut(&mut self.t7, K, n),
             Accum::Replace,
-            view(&m.f_k),
+            view(m.f_k()),
             xk_r,
             1.0,
             par,
@@ -442,7 +443,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf
         matmul(
             block_mut(&mut self.t8, K, n),
             Accum::Replace,
-            view(&m.f_p),
+            view(m.f_p()),
             xp_r,
             1.0,
             par,
@@ -530,10 +531,10 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf
             let xp: SVector<f64, P> = col(&self.xp, i);
             let xk: SVector<f64, K> = col(&self.xk, i);
             let p = self.pk[i];
-            let y_hat = m.h.h(t, &xp) + m.c * xk;
-            let e = m.h.residual(y, &y_hat);
-            let pct = p * m.c.transpose();
-            let mut s = m.c * pct + r;
+            let y_hat = m.h().h(t, &xp) + m.c() * xk;
+            let e = m.h().residual(y, &y_hat);
+            let pct = p * m.c().transpose();
+            let mut s = m.c() * pct + r;
             symmetrise(&mut s);
             let chol = Cholesky::new(s).ok_or(MpfError::NotPositiveDefinite {
                 what: "S_t = C P Cᵀ + R",
@@ -546,7 +547,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Mpf
             let gain = chol.solve(&pct.transpose()).transpose();
             set_col(&mut self.xk, i, &(xk + gain * e));
             // Joseph form: (I − K C) P (I − K C)ᵀ + K R Kᵀ.
-            let ikc = SMatrix::<f64, K, K>::identity() - gain * m.c;
+            let ikc = SMatrix::<f64, K, K>::identity() - gain * m.c();
             let mut p_new = ikc * p * ikc.transpose() + gain * r * gain.transpose();
             symmetrise(&mut p_new);
             self.pk[i] = p_new;
@@ -564,15 +565,16 @@ fn riccati_time_update<const P: usize, const K: usize, const NY: usize, H>(
     p_tt: &SMatrix<f64, K, K>,
 ) -> Option<(SMatrix<f64, P, P>, SMatrix<f64, K, P>, SMatrix<f64, K, K>)> {
     // P_A := P (A^k)ᵀ ; M := A^k P_A + Q^p ; T1 := chol(M)
-    let p_a = p_tt * m.a_k.transpose();
-    let mut mm = m.a_k * p_a + m.q_p;
+    let p_a = p_tt * m.a_k().transpose();
+    let mut mm = m.a_k() * p_a + m.q_p();
     symmetrise(&mut mm);
     let chol = Cholesky::new(mm)?;
     let t1 = chol.l();
     // L := F^k P_A M⁻¹ (M symmetric: solve M Lᵀ = P_Aᵀ (F^k)ᵀ).
-    let l_gain = chol.solve(&(m.f_k * p_a).transpose()).transpose();
+    let l_gain = chol.solve(&(m.f_k() * p_a).transpose()).transpose();
     // P := F^k P (F^k)ᵀ + Q^k − L M Lᵀ
-    let mut p_next = m.f_k * p_tt * m.f_k.transpose() + m.q_k - l_gain * mm * l_gain.transpose();
+    let mut p_next =
+        m.f_k() * p_tt * m.f_k().transpose() + m.q_k() - l_gain * mm * l_gain.transpose();
     symmetrise(&mut p_next);
     Some((t1, l_gain, p_next))
 }

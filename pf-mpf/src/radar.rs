@@ -6,6 +6,7 @@ use crate::model::{FactoredGaussian, Measurement, MixedLinearGaussian, Model5Mat
 use crate::mpf::{Mpf, MpfConfig};
 use nalgebra::{SMatrix, SVector};
 use pf_core::geometry::wrap_angle;
+use pf_core::params::ParamError;
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -73,11 +74,11 @@ impl RadarConfig {
     /// A non-positive period or variance, no steps, or a non-finite value.
     pub fn validate(&self) -> Result<()> {
         let bad = |name, value: f64, reason| {
-            Err(MpfError::InvalidParameter {
+            Err(MpfError::Param(ParamError {
                 name,
                 value,
                 reason,
-            })
+            }))
         };
         if !(self.period.is_finite() && self.period > 0.0) {
             return bad("T", self.period, "the sampling period must be positive");

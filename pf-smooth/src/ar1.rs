@@ -6,9 +6,10 @@
 //! [`pf_core::models::NoisyAr1`]; [`Theta::model`] builds it with that prior, to be filtered
 //! with `y_0` missing (it is already in the prior).
 
-use crate::error::{Result, SmoothError, finite, positive};
+use crate::error::{Result, SmoothError};
 use crate::functional::AdditiveFunctional;
 use pf_core::models::NoisyAr1;
+use pf_core::params::{finite, positive};
 use serde::{Deserialize, Serialize};
 
 /// The parameter `θ = (φ, σ², ρ²)`, in the variances the EM updates produce.
@@ -62,7 +63,7 @@ impl Theta {
     /// Check φ finite and σ², ρ² positive and finite.
     ///
     /// # Errors
-    /// [`SmoothError::InvalidParameter`] naming the parameter.
+    /// [`SmoothError::Param`] naming the parameter.
     pub fn validate(&self) -> Result<()> {
         finite("phi", self.phi)?;
         positive("sigma2", self.sigma2)?;

@@ -4,11 +4,12 @@
 //! Carlo EM with a growing number of particles.
 
 use crate::ar1::{Ar1Data, Ar1Statistics, SuffStats, Theta};
-use crate::error::{Result, SmoothError, at_least_one};
+use crate::error::{Result, SmoothError};
 use crate::fixed_lag::FixedLag;
 use crate::forward::ForwardSmoothing;
 use crate::path_space::PathSpace;
 use pf_core::filter::{FilterConfig, ParticleFilter, ResamplePolicy};
+use pf_core::params::{ParamError, at_least_one};
 use pf_core::resample::Resampler;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -168,22 +169,25 @@ impl ParticleSchedule {
     /// `N = 0`, `n0 = 0`, `max < n0`, or a ratio below 1 or not finite.
     pub fn validate(&self) -> Result<()> {
         match *self {
-            ParticleSchedule::Fixed(n) => at_least_one("N", n).map(|_| ()),
+            ParticleSchedule::Fixed(n) => {
+                at_least_one("N", n)?;
+                Ok(())
+            }
             ParticleSchedule::Geometric { n0, ratio, max } => {
                 at_least_one("n0", n0)?;
                 if !(ratio >= 1.0 && ratio.is_finite()) {
-                    return Err(SmoothError::InvalidParameter {
+                    return Err(SmoothError::Param(ParamError {
                         name: "ratio",
                         value: ratio,
                         reason: "the growth factor must be finite and at least 1",
-                    });
+                    }));
                 }
                 if max < n0 {
-                    return Err(SmoothError::InvalidParameter {
+                    return Err(SmoothError::Param(ParamError {
                         name: "max",
                         value: max as f64,
                         reason: "the cap must be at least n0",
-                    });
+                    }));
                 }
                 Ok(())
             }

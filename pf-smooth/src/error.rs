@@ -1,6 +1,7 @@
 //! The crate's error type: every variant says what went wrong and where.
 
 use pf_core::CoreError;
+use pf_core::params::ParamError;
 use thiserror::Error;
 
 /// Errors of pf-smooth. Bad user input (parameters, data) is reported here, never by a panic.
@@ -10,16 +11,9 @@ pub enum SmoothError {
     /// An error of the engine (filter degeneracy, Kalman failure, bad filter configuration).
     #[error(transparent)]
     Core(#[from] CoreError),
-    /// A parameter is outside its valid range.
-    #[error("invalid parameter {name} = {}: {reason}", pf_core::error::Shown(*value))]
-    InvalidParameter {
-        /// The parameter, as the paper names it (`sigma`, `rho`, `N`, `delta`, …).
-        name: &'static str,
-        /// The offending value.
-        value: f64,
-        /// What the valid range is.
-        reason: &'static str,
-    },
+    /// A parameter is outside its valid range (see [`pf_core::params`]).
+    #[error(transparent)]
+    Param(#[from] ParamError),
     /// The observation sequence `Y_0…Y_n` is too short.
     #[error("too few observations: got {got}, need at least {need} (Y_0…Y_n with n ≥ 1)")]
     TooFewObservations {
@@ -75,42 +69,3 @@ pub enum SmoothError {
 
 /// Result alias for pf-smooth.
 pub type Result<T, E = SmoothError> = std::result::Result<T, E>;
-
-/// `Ok(v)` if `v` is positive and finite.
-pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64> {
-    if value > 0.0 && value.is_finite() {
-        Ok(value)
-    } else {
-        Err(SmoothError::InvalidParameter {
-            name,
-            value,
-            reason: "must be positive and finite",
-        })
-    }
-}
-
-/// `Ok(v)` if `v` is finite.
-pub(crate) fn finite(name: &'static str, value: f64) -> Result<f64> {
-    if value.is_finite() {
-        Ok(value)
-    } else {
-        Err(SmoothError::InvalidParameter {
-            name,
-            value,
-            reason: "must be finite",
-        })
-    }
-}
-
-/// `Ok(n)` if `n ≥ 1`.
-pub(crate) fn at_least_one(name: &'static str, n: usize) -> Result<usize> {
-    if n >= 1 {
-        Ok(n)
-    } else {
-        Err(SmoothError::InvalidParameter {
-            name,
-            value: n as f64,
-            reason: "must be at least 1",
-        })
-    }
-}

@@ -63,16 +63,10 @@ impl<S: Clone, F: AdditiveFunctional<S>> FixedLag<S, F> {
     /// The estimator of `f` with lag `δ = delta`.
     ///
     /// # Errors
-    /// `δ = 0` ([`SmoothError::InvalidParameter`]): the term `s_k(X_k, X_{k+1})` needs at
+    /// `δ = 0` ([`SmoothError::Param`]): the term `s_k(X_k, X_{k+1})` needs at
     /// least the step `k + 1`.
     pub fn new(f: F, delta: usize) -> Result<Self> {
-        if delta == 0 {
-            return Err(SmoothError::InvalidParameter {
-                name: "delta",
-                value: 0.0,
-                reason: "the lag must be at least 1",
-            });
-        }
+        pf_core::params::at_least_one("delta", delta)?;
         let d = f.dim();
         Ok(FixedLag {
             f,

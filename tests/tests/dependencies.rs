@@ -1,6 +1,7 @@
 //! The library crates must never pull rerun, plotters or clap: users who depend on one paper
-//! crate get the algorithm and the engine, not the drawing stack. Checked from
-//! `cargo metadata`'s resolved graph, following normal (non-dev, non-build) edges only.
+//! crate get the algorithm and the engine, not the drawing stack. And a paper crate depends
+//! on no other paper crate: what two of them share lives in pf-core. Checked from
+//! `cargo metadata`'s resolved graph.
 //!
 //! The graph is filtered to the host platform: offline, `cargo metadata` can only read the
 //! manifests of crates already downloaded, and a build downloads only the host's (the
@@ -49,6 +50,12 @@ fn metadata() -> Value {
 
 /// Names of every package reachable from `root` through normal dependency edges.
 fn normal_closure(meta: &Value, root: &str) -> BTreeSet<String> {
+    closure(meta, root, false)
+}
+
+/// Names of every package reachable from `root`: through normal edges only, or through
+/// every edge (normal, dev and build) when `all_kinds`.
+fn closure(meta: &Value, root: &str, all_kinds: bool) -> BTreeSet<String> {
     let names: HashMap<&str, &str> = meta["packages"]
         .as_array()
         .unwrap()
@@ -78,7 +85,7 @@ fn normal_closure(meta: &Value, root: &str) -> BTreeSet<String> {
                 .unwrap()
                 .iter()
                 .any(|k| k["kind"].is_null());
-            if normal {
+            if normal || all_kinds {
                 stack.push(dep["pkg"].as_str().unwrap());
             }
         }
@@ -86,10 +93,9 @@ fn normal_closure(meta: &Value, root: &str) -> BTreeSet<String> {
     seen.into_iter().map(|id| names[id].to_string()).collect()
 }
 
-#[test]
-fn library_crates_never_depend_on_the_drawing_stack() {
-    let meta = metadata();
-    let members: Vec<String> = meta["workspace_members"]
+/// The workspace's package names.
+fn members(meta: &Value) -> Vec<String> {
+    meta["workspace_members"]
         .as_array()
         .unwrap()
         .iter()
@@ -105,7 +111,13 @@ fn library_crates_never_depend_on_the_drawing_stack() {
                 .unwrap()
                 .to_string()
         })
-        .collect();
+        .collect()
+}
+
+#[test]
+fn library_crates_never_depend_on_the_drawing_stack() {
+    let meta = metadata();
+    let members = members(&meta);
     let libraries: Vec<&String> = members
         .iter()
         .filter(|m| m.as_str() != "pf-viz" && m.as_str() != "pf-tests")
@@ -123,4 +135,34 @@ fn library_crates_never_depend_on_the_drawing_stack() {
     // The check must be able to fail: pf-viz does pull them.
     let viz = normal_closure(&meta, "pf-viz");
     assert!(viz.contains("plotters") && viz.contains("clap"));
+}
+
+/// A paper crate reaches pf-core and no other workspace member, through any edge (normal,
+/// dev or build): the papers stay independent, and pf-core depends on no member at all.
+#[test]
+fn paper_crates_never_depend_on_each_other() {
+    let meta = metadata();
+    let members = members(&meta);
+    let papers: Vec<&String> = members
+        .iter()
+        .filter(|m| !["pf-core", "pf-viz", "pf-tests"].contains(&m.as_str()))
+        .collect();
+    // The five papers: a member added or renamed must be placed on one side or the other.
+    assert_eq!(papers.len(), 5, "{papers:?}");
+    for paper in &papers {
+        let reach = closure(&meta, paper, true);
+        for other in members.iter().filter(|m| m != paper) {
+            assert!(
+                other == "pf-core" || !reach.contains(other),
+                "{paper} depends on {other}"
+            );
+        }
+    }
+    let core = closure(&meta, "pf-core", true);
+    for m in members.iter().filter(|m| *m != "pf-core") {
+        assert!(!core.contains(m), "pf-core depends on {m}");
+    }
+    // The check must be able to fail: pf-viz reaches every paper crate.
+    let viz = normal_closure(&meta, "pf-viz");
+    assert!(papers.iter().all(|p| viz.contains(*p)));
 }

@@ -41,6 +41,7 @@ use crate::buffer::{Line, ParticleBuf};
 use crate::error::{CoreError, Result};
 use crate::limits::{PARTICLE_BUFFERS, check_count, check_memory};
 use crate::mc::{Par, PfRng, stream_rng};
+use crate::params::ParamError;
 use crate::resample::{
     BLOCK, BlockPlan, Blocked, ChunkSplit, ChunkedWeights, Resampler, SCAN, chunks_per_block,
     prefix4_each, stratified_index_in,
@@ -298,25 +299,25 @@ impl<M: ScalarModel> BatchBootstrap<M> {
     /// `N = 0`, or a chunk size of 0 or of 2³² or more.
     pub fn new(model: M, cfg: BatchConfig) -> Result<Self> {
         if cfg.n_particles == 0 {
-            return Err(CoreError::InvalidParameter {
+            return Err(CoreError::Param(ParamError {
                 name: "N",
                 value: 0.0,
                 reason: "the number of particles must be at least 1",
-            });
+            }));
         }
         if cfg.chunk == 0 {
-            return Err(CoreError::InvalidParameter {
+            return Err(CoreError::Param(ParamError {
                 name: "chunk",
                 value: 0.0,
                 reason: "the chunk size must be at least 1",
-            });
+            }));
         }
         if u32::try_from(cfg.chunk).is_err() {
-            return Err(CoreError::InvalidParameter {
+            return Err(CoreError::Param(ParamError {
                 name: "chunk",
                 value: cfg.chunk as f64,
                 reason: "the chunk size must be below 2³² (a chunk's scratch is meant to stay in cache)",
-            });
+            }));
         }
         cfg.policy.validate()?;
         let n = check_count("the number of particles N", cfg.n_particles)?;
@@ -1279,7 +1280,7 @@ mod tests {
                     ..BatchConfig::new(10, 0)
                 }
             ),
-            Err(CoreError::InvalidParameter { name: "chunk", .. })
+            Err(CoreError::Param(ParamError { name: "chunk", .. }))
         ));
         // A count no machine can hold is refused, not a capacity overflow panic.
         assert!(matches!(

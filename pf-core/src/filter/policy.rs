@@ -1,6 +1,7 @@
 //! When to resample. The policy belongs to the filter's configuration, never to the model.
 
 use crate::error::{CoreError, Result};
+use crate::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// When the filter resamples, judged on the weights left by the previous step.
@@ -41,20 +42,20 @@ impl ResamplePolicy {
     pub fn validate(&self) -> Result<()> {
         match *self {
             ResamplePolicy::EssBelow(EssThreshold::Absolute(n_t)) if n_t.is_nan() || n_t < 0.0 => {
-                Err(CoreError::InvalidParameter {
+                Err(CoreError::Param(ParamError {
                     name: "N_T",
                     value: n_t,
                     reason: "ESS threshold must be a non-negative number",
-                })
+                }))
             }
             ResamplePolicy::EssBelow(EssThreshold::Fraction(r))
                 if r.is_nan() || r <= 0.0 || r > 1.0 =>
             {
-                Err(CoreError::InvalidParameter {
+                Err(CoreError::Param(ParamError {
                     name: "ESS fraction",
                     value: r,
                     reason: "must lie in (0, 1]",
-                })
+                }))
             }
             _ => Ok(()),
         }

@@ -7,6 +7,7 @@ use crate::limits::{
 };
 use crate::model::{EuclideanState, Proposal, StateSpaceModel, TransitionDensity};
 use crate::observe::{Observer, StepView};
+use crate::params::ParamError;
 use crate::particles;
 use crate::resample::{Resample, Resampler};
 use crate::weights;
@@ -39,11 +40,11 @@ impl FilterConfig {
     /// Check that the configuration can run.
     pub fn validate(&self) -> Result<()> {
         if self.n_particles == 0 {
-            return Err(CoreError::InvalidParameter {
+            return Err(CoreError::Param(ParamError {
                 name: "N",
                 value: 0.0,
                 reason: "the number of particles must be at least 1",
-            });
+            }));
         }
         check_count("the number of particles N", self.n_particles)?;
         self.policy.validate()
@@ -57,17 +58,18 @@ fn identity(n: usize) -> Result<Vec<usize>> {
     Ok(a)
 }
 
-/// A sequential importance sampling–resampling filter, generic over the model `M`, the
-/// mutation (proposal) `P` and the resampling scheme `Rs`.
+/// A sequential importance sampling–resampling filter, generic over the model `M` and the
+/// mutation (proposal) `P`; the resampling scheme is the configuration's
+/// [`FilterConfig::resampler`].
 ///
 /// Step it online with [`step`](Self::step) or over a sequence with [`run`](Self::run). Its
 /// buffers are allocated once; a step swaps them instead of reallocating. A step that fails
 /// (all weights zero, a NaN weight) returns an error and leaves the filter as it was before
 /// that step.
-pub struct ParticleFilter<M: StateSpaceModel, P = Bootstrap, Rs = Resampler> {
+pub struct ParticleFilter<M: StateSpaceModel, P = Bootstrap> {
     model: M,
     mutation: P,
-    resampler: Rs,
+    resampler: Resampler,
     policy: ResamplePolicy,
     n: usize,
     /// `ξ_k^i`.
@@ -85,35 +87,35 @@ pub struct ParticleFilter<M: StateSpaceModel, P = Bootstrap, Rs = Resampler> {
     last: Option<StepReport>,
 }
 
-impl<M: StateSpaceModel> ParticleFilter<M, Bootstrap, Resampler> {
+impl<M: StateSpaceModel> ParticleFilter<M, Bootstrap> {
     /// The bootstrap filter (Gordon, Salmond & Smith 1993).
     pub fn bootstrap(model: M, config: FilterConfig) -> Result<Self> {
-        Self::new(model, Bootstrap, config.resampler, config)
+        Self::new(model, Bootstrap, config)
     }
 }
 
-impl<M: TransitionDensity, Q: Proposal<M>> ParticleFilter<M, Guided<Q>, Resampler> {
+impl<M: TransitionDensity, Q: Proposal<M>> ParticleFilter<M, Guided<Q>> {
     /// The guided filter with the proposal `q` and the configuration's resampler.
     pub fn guided(model: M, q: Q, config: FilterConfig) -> Result<Self> {
-        Self::new(model, Guided(q), config.resampler, config)
+        Self::new(model, Guided(q), config)
     }
 }
 
 /// The configuration and the last step, not the particles.
-impl<M: StateSpaceModel, P, Rs> std::fmt::Debug for ParticleFilter<M, P, Rs> {
+impl<M: StateSpaceModel, P> std::fmt::Debug for ParticleFilter<M, P> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ParticleFilter")
             .field("n_particles", &self.n)
+            .field("resampler", &self.resampler)
             .field("policy", &self.policy)
             .field("last", &self.last)
             .finish_non_exhaustive()
     }
 }
 
-impl<M: StateSpaceModel, P: Mutation<M>, Rs: Resample> ParticleFilter<M, P, Rs> {
-    /// A filter with the given mutation and resampler; `config.resampler` is ignored in
-    /// favour of `resampler`.
-    pub fn new(model: M, mutation: P, resampler: Rs, config: FilterConfig) -> Result<Self> {
+impl<M: StateSpaceModel, P: Mutation<M>> ParticleFilter<M, P> {
+    /// A filter with the given mutation, resampling with `config.resampler`.
+    pub fn new(model: M, mutation: P, config: FilterConfig) -> Result<Self> {
         config.validate()?;
         let n = config.n_particles;
         // Two arrays of states, four of weights and two of ancestors, before any is taken.
@@ -123,7 +125,7 @@ impl<M: StateSpaceModel, P: Mutation<M>, Rs: Resample> ParticleFilter<M, P, Rs> 
         Ok(ParticleFilter {
             model,
             mutation,
-            resampler,
+            resampler: config.resampler,
             policy: config.policy,
             n,
             x: try_with_capacity(PARTICLES, n)?,
@@ -332,7 +334,7 @@ impl<M: StateSpaceModel, P: Mutation<M>, Rs: Resample> ParticleFilter<M, P, Rs> 
             }
             reports.push(report);
         }
-        observer.on_finish();
+        observer.on_finish()?;
         Ok(RunSummary {
             log_lik: self.log_likelihood(),
             reports,
@@ -340,7 +342,7 @@ impl<M: StateSpaceModel, P: Mutation<M>, Rs: Resample> ParticleFilter<M, P, Rs> 
     }
 }
 
-impl<M, P, Rs> ParticleFilter<M, P, Rs>
+impl<M, P> ParticleFilter<M, P>
 where
     M: StateSpaceModel,
     M::State: EuclideanState,
@@ -494,6 +496,32 @@ mod tests {
             count > 0 && count < 100,
             "the test must exercise both branches"
         );
+    }
+
+    /// An observer's error (here one that always fails) comes out of `run`, after the
+    /// other members of the tuple finished.
+    #[test]
+    fn run_returns_an_observers_error() {
+        struct Fails;
+        impl<S> Observer<S> for Fails {
+            fn on_finish(&mut self) -> Result<()> {
+                Err(CoreError::Empty {
+                    what: "test observer",
+                })
+            }
+        }
+        let mut pf = ParticleFilter::bootstrap(ar1(), FilterConfig::new(8)).unwrap();
+        let mut obs = (EssRecorder::new(), Fails);
+        let e = pf
+            .run(&data(5), None, &mut stream_rng(1, 0), &mut obs)
+            .unwrap_err();
+        assert_eq!(
+            e,
+            CoreError::Empty {
+                what: "test observer"
+            }
+        );
+        assert_eq!(obs.0.ess().len(), data(5).len());
     }
 
     #[test]

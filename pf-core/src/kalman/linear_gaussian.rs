@@ -17,6 +17,7 @@ use std::thread::LocalKey;
 use crate::error::{CoreError, Result};
 use crate::gaussian::{MvNormal, cholesky};
 use crate::model::{StateSpaceModel, TransitionDensity};
+use crate::params::ParamError;
 
 /// A simulated path: states `X_0..X_n` and observations `Y_0..Y_n` (n + 1 of each).
 pub type Simulated = (Vec<DVector<f64>>, Vec<DVector<f64>>);
@@ -97,11 +98,11 @@ fn check_symmetric(name: &'static str, m: &DMatrix<f64>) -> Result<DMatrix<f64>>
         for i in (j + 1)..m.nrows() {
             let gap = m[(i, j)] - m[(j, i)];
             if gap.abs() > 1e-10 * scale {
-                return Err(CoreError::InvalidParameter {
+                return Err(CoreError::Param(ParamError {
                     name,
                     value: gap,
                     reason: "covariance must be symmetric (value is M_ij − M_ji)",
-                });
+                }));
             }
         }
     }
@@ -606,7 +607,7 @@ mod tests {
         );
         assert!(matches!(
             e,
-            Err(CoreError::InvalidParameter { name: "Q", .. })
+            Err(CoreError::Param(ParamError { name: "Q", .. }))
         ));
         let e = LinearGaussian::new(a, None, c, q, mat(1, 1, &[0.0]), m0, p0);
         assert!(matches!(

@@ -17,6 +17,7 @@ use nalgebra::{DMatrix, DVector};
 use super::KalmanState;
 use crate::error::{CoreError, Result};
 use crate::gaussian::{cholesky_into, log_normal_chol_in_place, symmetrise};
+use crate::params::ParamError;
 
 /// Sigma-point scaling `(α, β, κ)`.
 ///
@@ -119,27 +120,9 @@ impl Ukf {
     /// A UKF with the given scaling. Errors if α ≤ 0 or a parameter is not finite.
     pub fn new(params: UkfParams) -> Result<Self> {
         let UkfParams { alpha, beta, kappa } = params;
-        if !(alpha > 0.0 && alpha.is_finite()) {
-            return Err(CoreError::InvalidParameter {
-                name: "alpha",
-                value: alpha,
-                reason: "α must be positive and finite",
-            });
-        }
-        if !beta.is_finite() {
-            return Err(CoreError::InvalidParameter {
-                name: "beta",
-                value: beta,
-                reason: "β must be finite",
-            });
-        }
-        if !kappa.is_finite() {
-            return Err(CoreError::InvalidParameter {
-                name: "kappa",
-                value: kappa,
-                reason: "κ must be finite",
-            });
-        }
+        crate::params::positive("alpha", alpha)?;
+        crate::params::finite("beta", beta)?;
+        crate::params::finite("kappa", kappa)?;
         Ok(Self {
             params,
             n: 0,
@@ -186,11 +169,11 @@ impl Ukf {
         let n_lambda = alpha * alpha * (nf + kappa);
         // α, κ finite (checked in `new`), so n_lambda is finite.
         if n_lambda <= 0.0 {
-            return Err(CoreError::InvalidParameter {
+            return Err(CoreError::Param(ParamError {
                 name: "kappa",
                 value: kappa,
                 reason: "n + κ must be positive (n is the state dimension)",
-            });
+            }));
         }
         let lambda = n_lambda - nf;
         let wi = 0.5 / n_lambda;
@@ -468,7 +451,7 @@ mod tests {
                 alpha: 0.0,
                 ..UkfParams::default()
             }),
-            Err(CoreError::InvalidParameter { name: "alpha", .. })
+            Err(CoreError::Param(ParamError { name: "alpha", .. }))
         ));
         let mut ukf = Ukf::new(UkfParams {
             kappa: -3.0,
@@ -478,7 +461,7 @@ mod tests {
         let mut st = KalmanState::new(DVector::zeros(2), DMatrix::identity(2, 2));
         assert!(matches!(
             ukf.predict(&mut st, |x| x.clone(), &DMatrix::identity(2, 2)),
-            Err(CoreError::InvalidParameter { name: "kappa", .. })
+            Err(CoreError::Param(ParamError { name: "kappa", .. }))
         ));
         let mut ukf = Ukf::new(UkfParams::default()).unwrap();
         assert!(matches!(

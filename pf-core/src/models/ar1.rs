@@ -1,12 +1,12 @@
 //! The noisy AR(1) model of Cappé & Moulines, Section 5.
 
-use crate::error::{CoreError, Result};
+use crate::error::Result;
 use crate::filter::ScalarModel;
+use crate::gaussian::LN_2PI;
 use crate::model::{StateSpaceModel, TransitionDensity};
+use crate::params::{self, ParamError, positive};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
-
-const LN_2PI: f64 = 1.837_877_066_409_345_3;
 
 /// `X_{k+1} = φ X_k + σ U_k`, `Y_k = X_k + ρ V_k`, with `U_k, V_k ~ N(0, 1)` and
 /// `X_0 ~ N(m_0, s_0²)`.
@@ -30,18 +30,6 @@ pub struct NoisyAr1 {
     log_norm_f: f64,
 }
 
-fn positive(name: &'static str, value: f64) -> Result<f64> {
-    if value > 0.0 && value.is_finite() {
-        Ok(value)
-    } else {
-        Err(CoreError::InvalidParameter {
-            name,
-            value,
-            reason: "must be positive and finite",
-        })
-    }
-}
-
 impl NoisyAr1 {
     /// The model with its stationary initial law (needs `|φ| < 1`).
     ///
@@ -49,11 +37,12 @@ impl NoisyAr1 {
     /// σ or ρ not positive, or φ not in (−1, 1).
     pub fn new(phi: f64, sigma: f64, rho: f64) -> Result<Self> {
         if phi.is_nan() || phi.abs() >= 1.0 {
-            return Err(CoreError::InvalidParameter {
-                name: "phi",
-                value: phi,
-                reason: "must lie in (-1, 1) for the stationary initial law; use with_initial",
-            });
+            return Err(ParamError::new(
+                "phi",
+                phi,
+                "must lie in (-1, 1) for the stationary initial law; use with_initial",
+            )
+            .into());
         }
         let model = Self::build(phi, positive("sigma", sigma)?, positive("rho", rho)?);
         Ok(NoisyAr1 {
@@ -68,13 +57,7 @@ impl NoisyAr1 {
     /// # Errors
     /// φ or `m0` not finite, or σ, ρ, `s0` not positive.
     pub fn with_prior(phi: f64, sigma: f64, rho: f64, m0: f64, s0: f64) -> Result<Self> {
-        if !phi.is_finite() {
-            return Err(CoreError::InvalidParameter {
-                name: "phi",
-                value: phi,
-                reason: "must be finite",
-            });
-        }
+        params::finite("phi", phi)?;
         Self::build(phi, positive("sigma", sigma)?, positive("rho", rho)?).with_initial(m0, s0)
     }
 
@@ -123,14 +106,7 @@ impl NoisyAr1 {
     /// # Errors
     /// `s0` not positive, or `m0` not finite.
     pub fn with_initial(mut self, m0: f64, s0: f64) -> Result<Self> {
-        if !m0.is_finite() {
-            return Err(CoreError::InvalidParameter {
-                name: "m0",
-                value: m0,
-                reason: "must be finite",
-            });
-        }
-        self.m0 = m0;
+        self.m0 = params::finite("m0", m0)?;
         self.s0 = positive("s0", s0)?;
         Ok(self)
     }

@@ -1,12 +1,16 @@
 //! Records ancestor indices into a [`Genealogy`].
 
 use super::{Observer, StepView};
+use crate::error::{CoreError, Result};
 use crate::genealogy::Genealogy;
 
-/// Builds the [`Genealogy`] of a run.
+/// Builds the [`Genealogy`] of a run. A step it cannot record (ancestors that do not fit the
+/// particle count it was started with) ends the recording; the error comes out of
+/// [`on_finish`](Observer::on_finish).
 #[derive(Debug, Clone, Default)]
 pub struct GenealogyRecorder {
     genealogy: Genealogy,
+    error: Option<CoreError>,
 }
 
 impl GenealogyRecorder {
@@ -29,9 +33,16 @@ impl GenealogyRecorder {
 impl<S> Observer<S> for GenealogyRecorder {
     fn on_start(&mut self, n: usize) {
         self.genealogy = Genealogy::new(n);
+        self.error = None;
     }
     fn on_step(&mut self, view: &StepView<'_, S>) {
-        // The filter's ancestors always have length N and valid indices.
-        let _ = self.genealogy.push(view.ancestors);
+        if self.error.is_none()
+            && let Err(e) = self.genealogy.push(view.ancestors)
+        {
+            self.error = Some(e.at_step(view.report.t));
+        }
+    }
+    fn on_finish(&mut self) -> Result<()> {
+        self.error.clone().map_or(Ok(()), Err)
     }
 }

@@ -1,7 +1,11 @@
 //! Observers: what an analysis records from each step, with no I/O in the engine.
 //!
 //! An [`Observer`] is passed as `&mut`, so the caller keeps it and reads what it recorded
-//! afterwards. Observers compose as tuples, and [`Every`] decimates them.
+//! afterwards. Observers compose as tuples, and [`Every`] decimates them. A recorder that
+//! cannot record a step keeps the first such error and returns it from
+//! [`on_finish`](Observer::on_finish), which [`ParticleFilter::run`] passes on.
+//!
+//! [`ParticleFilter::run`]: crate::filter::ParticleFilter::run
 
 mod ancestry;
 mod cloud;
@@ -15,6 +19,7 @@ pub use ess::EssRecorder;
 pub use estimates::EstimateRecorder;
 pub use genealogy::GenealogyRecorder;
 
+use crate::error::Result;
 use crate::filter::StepReport;
 
 /// Everything about one step, borrowed from the filter.
@@ -38,8 +43,16 @@ pub trait Observer<S> {
     fn on_start(&mut self, _n_particles: usize) {}
     /// After every step.
     fn on_step(&mut self, _view: &StepView<'_, S>) {}
-    /// After the last step.
-    fn on_finish(&mut self) {}
+    /// After the last step: the first error met while recording, if any (a recorder does
+    /// not stop the run; it reports here, and [`ParticleFilter::run`] returns the error).
+    ///
+    /// [`ParticleFilter::run`]: crate::filter::ParticleFilter::run
+    ///
+    /// # Errors
+    /// What the observer could not record, with the step at which it happened.
+    fn on_finish(&mut self) -> Result<()> {
+        Ok(())
+    }
 }
 
 impl<S> Observer<S> for () {}
@@ -51,7 +64,7 @@ impl<S, O: Observer<S> + ?Sized> Observer<S> for &mut O {
     fn on_step(&mut self, view: &StepView<'_, S>) {
         (**self).on_step(view)
     }
-    fn on_finish(&mut self) {
+    fn on_finish(&mut self) -> Result<()> {
         (**self).on_finish()
     }
 }
@@ -69,9 +82,10 @@ impl<S, O: Observer<S>> Observer<S> for Option<O> {
             o.on_step(view)
         }
     }
-    fn on_finish(&mut self) {
-        if let Some(o) = self {
-            o.on_finish()
+    fn on_finish(&mut self) -> Result<()> {
+        match self {
+            Some(o) => o.on_finish(),
+            None => Ok(()),
         }
     }
 }
@@ -85,8 +99,16 @@ macro_rules! tuple_observer {
             fn on_step(&mut self, view: &StepView<'_, S>) {
                 $(self.$idx.on_step(view);)+
             }
-            fn on_finish(&mut self) {
-                $(self.$idx.on_finish();)+
+            /// Finishes every member, then returns the first member's error.
+            fn on_finish(&mut self) -> Result<()> {
+                let mut first = Ok(());
+                $(
+                    let r = self.$idx.on_finish();
+                    if first.is_ok() {
+                        first = r;
+                    }
+                )+
+                first
             }
         }
     };
@@ -126,7 +148,7 @@ impl<S, O: Observer<S>> Observer<S> for Every<O> {
             self.inner.on_step(view)
         }
     }
-    fn on_finish(&mut self) {
+    fn on_finish(&mut self) -> Result<()> {
         self.inner.on_finish()
     }
 }
@@ -150,14 +172,27 @@ mod tests {
         fn on_step(&mut self, view: &StepView<'_, f64>) {
             self.steps.push(view.report.t);
         }
-        fn on_finish(&mut self) {
+        fn on_finish(&mut self) -> Result<()> {
             self.finishes += 1;
+            Ok(())
         }
     }
 
     fn feed(o: &mut impl Observer<f64>, steps: usize) {
-        let (x, lw, w, a) = ([0.0], [0.0], [1.0], [0]);
-        o.on_start(1);
+        feed_with(o, 1, steps, &[0.0], &[0]).unwrap();
+    }
+
+    /// `steps` steps of one particle set `x` with ancestors `a`, announced as `n` particles.
+    fn feed_with(
+        o: &mut impl Observer<f64>,
+        n: usize,
+        steps: usize,
+        x: &[f64],
+        a: &[usize],
+    ) -> Result<()> {
+        let w = vec![1.0 / x.len().max(1) as f64; x.len()];
+        let lw: Vec<f64> = w.iter().map(|w| w.ln()).collect();
+        o.on_start(n);
         for t in 0..steps {
             let report = StepReport {
                 t,
@@ -168,13 +203,36 @@ mod tests {
             };
             o.on_step(&StepView {
                 report,
-                particles: &x,
+                particles: x,
                 log_weights: &lw,
                 weights: &w,
-                ancestors: &a,
+                ancestors: a,
             });
         }
-        o.on_finish();
+        o.on_finish()
+    }
+
+    /// A recorder that cannot record a step says so when the run finishes, with the step,
+    /// and a tuple passes the first error on after finishing every member.
+    #[test]
+    fn recorder_errors_reach_the_caller() {
+        use crate::error::CoreError;
+        // Ancestors of 2 particles where the genealogy was started with 3.
+        let mut g = GenealogyRecorder::new();
+        let e = feed_with(&mut g, 3, 2, &[0.0, 1.0], &[0, 1]).unwrap_err();
+        assert!(matches!(e, CoreError::AtStep { t: 0, .. }), "{e}");
+        // The same recorder, restarted with a consistent run, is clean again.
+        feed_with(&mut g, 2, 3, &[0.0, 1.0], &[1, 1]).unwrap();
+        assert_eq!(g.genealogy().n_steps(), 3);
+        // An ancestry tree cannot start from no particles.
+        let mut tree = AncestryRecorder::new();
+        let e = feed_with(&mut tree, 0, 2, &[], &[]).unwrap_err();
+        assert!(matches!(e, CoreError::AtStep { t: 0, .. }), "{e}");
+        assert!(tree.tree().is_none());
+        // In a tuple, the count still finishes and the error still comes out.
+        let mut pair = (Count::default(), GenealogyRecorder::new());
+        assert!(feed_with(&mut pair, 3, 2, &[0.0], &[0]).is_err());
+        assert_eq!(pair.0.finishes, 1);
     }
 
     /// `Some` passes every call through, `None` swallows them, and either composes in a

@@ -5,6 +5,7 @@ use crate::error::{DredgeError, Result};
 use crate::estimator::{EstimatorConfig, run_filter};
 use crate::simulator::SimConfig;
 use pf_core::mc::{Par, try_replicate};
+use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// Settings of Fig. 8.
@@ -95,11 +96,11 @@ pub struct Fig8Result {
 /// Invalid settings, `runs = 0`, or a failed filter step.
 pub fn fig8(cfg: &Fig8Config) -> Result<Fig8Result> {
     if cfg.runs == 0 {
-        return Err(DredgeError::InvalidParameter {
+        return Err(DredgeError::Param(ParamError {
             name: "runs",
             value: 0.0,
             reason: "at least one run",
-        });
+        }));
     }
     let c = super::cycle::simulated(&cfg.sim, cfg.seed)?;
     let data = c.to_data();

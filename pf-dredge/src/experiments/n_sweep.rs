@@ -8,6 +8,7 @@ use crate::estimator::{EstimatorConfig, residuals_of, run_filter};
 use crate::simulator::SimConfig;
 use pf_core::mc::{Par, mean_and_se, try_replicate};
 use pf_core::metrics::ResidualSummary;
+use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// Settings of the `N` sweep.
@@ -79,11 +80,11 @@ pub struct NSweepResult {
 /// Invalid settings, an empty list, no phase 3, or a failed filter step.
 pub fn n_sweep(cfg: &NSweepConfig) -> Result<NSweepResult> {
     if cfg.n_particles.is_empty() || cfg.reps == 0 {
-        return Err(DredgeError::InvalidParameter {
+        return Err(DredgeError::Param(ParamError {
             name: "n_particles/reps",
             value: 0.0,
             reason: "at least one N and one run",
-        });
+        }));
     }
     let c = super::cycle::simulated(&cfg.sim, cfg.seed)?;
     let p3 = phase3(&c)?;

@@ -4,12 +4,13 @@
 //! (Fig. 4c), and one example run with its energies at the key frame.
 
 use super::{Comparison, ComparisonConfig, Method, compare_with_progress, tracker_for};
-use crate::error::{EpfError, Result};
+use crate::error::Result;
 use crate::metrics::rec_of;
 use crate::scenario::{Scenario, ScenarioConfig, TruthTrack, simulate};
 use crate::tracker::{EnergyTable, Record, TrackResult, energies_at, track};
 use pf_core::mc::{Par, Scale, mean_and_se, stream_rng};
 use pf_core::metrics::{RecCurve, tolerance_grid};
+use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// The sizes of [`section4()`]. The paper states none of them (it shows one run per
@@ -72,12 +73,13 @@ impl Section4Config {
 
     fn validate(&self) -> Result<()> {
         if self.variants.is_empty() || self.variants.len() > MAX_VARIANTS {
-            return Err(EpfError::InvalidParameter {
-                name: "variants",
-                value: self.variants.len() as f64,
-                reason: "between 1 and 9 scenario variants (their seeds are 100 apart below the \
-                         ablation's)",
-            });
+            return Err(ParamError::new(
+                "variants",
+                self.variants.len() as f64,
+                "between 1 and 9 scenario variants (their seeds are 100 apart below the \
+                 ablation's)",
+            )
+            .into());
         }
         Ok(())
     }
@@ -449,6 +451,7 @@ pub fn smallest_e(t: &EnergyTable, source: impl Fn(usize) -> Option<i64>) -> Sma
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::EpfError;
 
     /// Two targets and their detections 0 (of T1) and 1 (of T2), with the energies `e`, the
     /// gates `gated` and the assignment `a`.
@@ -550,18 +553,18 @@ mod tests {
         cfg.variants = vec![(0.0, 0.0); 10];
         assert!(matches!(
             section4(&cfg),
-            Err(EpfError::InvalidParameter {
+            Err(EpfError::Param(ParamError {
                 name: "variants",
                 ..
-            })
+            }))
         ));
         cfg.variants.clear();
         assert!(matches!(
             section4(&cfg),
-            Err(EpfError::InvalidParameter {
+            Err(EpfError::Param(ParamError {
                 name: "variants",
                 ..
-            })
+            }))
         ));
     }
 }

@@ -10,6 +10,7 @@ use crate::ohf::OhfConfig;
 use crate::param::Gaussian;
 use crate::quadrature::PolarGridConfig;
 use pf_core::mc::stream_rng;
+use pf_core::params::ParamError;
 
 /// Settings of Fig. 2.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -60,34 +61,34 @@ impl EllipsesConfig {
         self.ohf.validate()?;
         self.grid.validate()?;
         if self.step < 2 || self.step > self.scenario.n_samples {
-            return Err(HomotopyError::InvalidParameter {
+            return Err(HomotopyError::Param(ParamError {
                 name: "step K",
                 value: self.step as f64,
                 reason: "must lie in 2..=n_samples (instant 1 only initialises)",
-            });
+            }));
         }
         if self.lambda.is_empty() {
-            return Err(HomotopyError::InvalidParameter {
+            return Err(HomotopyError::Param(ParamError {
                 name: "lambda",
                 value: 0.0,
                 reason: "give at least one λ in [0, 1]",
-            });
+            }));
         }
         for &l in &self.lambda {
             if !(0.0..=1.0).contains(&l) {
-                return Err(HomotopyError::InvalidParameter {
+                return Err(HomotopyError::Param(ParamError {
                     name: "lambda",
                     value: l,
                     reason: "each λ must lie in [0, 1]",
-                });
+                }));
             }
         }
         if !(self.mass > 0.0 && self.mass < 1.0) {
-            return Err(HomotopyError::InvalidParameter {
+            return Err(HomotopyError::Param(ParamError {
                 name: "mass",
                 value: self.mass,
                 reason: "must lie in (0, 1)",
-            });
+            }));
         }
         Ok(())
     }
@@ -148,11 +149,11 @@ pub fn ellipses(cfg: &EllipsesConfig) -> Result<EllipsesResult> {
         let (_, g) = recorded
             .iter()
             .min_by(|a, b| (a.0 - l).abs().total_cmp(&(b.0 - l).abs()))
-            .ok_or(HomotopyError::InvalidParameter {
+            .ok_or(HomotopyError::Param(ParamError {
                 name: "lambda",
                 value: l,
                 reason: "not reached by the flow",
-            })?;
+            }))?;
         let e = pf_core::gaussian::error_ellipse(
             [g.mean[0], g.mean[1]],
             [

@@ -15,6 +15,7 @@ use super::rmse::{PerAlgorithm, RmseConfig, final_squared_errors};
 use crate::error::{HomotopyError, Result};
 use crate::filters::Algorithm;
 use crate::model::ScenarioConfig;
+use pf_core::params::ParamError;
 
 /// Settings of the sweep.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -58,11 +59,11 @@ impl GeometryConfig {
     /// Check the settings.
     pub fn validate(&self) -> Result<()> {
         if self.turn_rates_deg.is_empty() || self.sigmas_deg.is_empty() {
-            return Err(HomotopyError::InvalidParameter {
+            return Err(HomotopyError::Param(ParamError {
                 name: "geometry sweep",
                 value: 0.0,
                 reason: "needs at least one turn rate and one σ",
-            });
+            }));
         }
         for cell in self.cells() {
             cell.validate()?;

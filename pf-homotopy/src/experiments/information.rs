@@ -18,6 +18,7 @@ use crate::model::ScenarioConfig;
 use crate::ohf::OhfConfig;
 use crate::quadrature::PolarGridConfig;
 use pf_core::mc::{Par, try_replicate};
+use pf_core::params::ParamError;
 
 /// Settings of the information curves.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -87,11 +88,11 @@ impl InformationResult {
 /// Invalid settings or a failing correction.
 pub fn information(cfg: &InformationConfig) -> Result<InformationResult> {
     if cfg.realisations == 0 {
-        return Err(HomotopyError::InvalidParameter {
+        return Err(HomotopyError::Param(ParamError {
             name: "realisations R",
             value: 0.0,
             reason: "at least one realisation is needed",
-        });
+        }));
     }
     let mut gain = Vec::new();
     for &[turn, sigma] in &cfg.curves {

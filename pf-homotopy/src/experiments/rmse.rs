@@ -9,6 +9,7 @@ use crate::error::{HomotopyError, Result};
 use crate::filters::{Algorithm, FilterSettings, track};
 use crate::model::ScenarioConfig;
 use pf_core::mc::{Par, try_replicate};
+use pf_core::params::ParamError;
 
 /// One value per algorithm, serialised with the CLI contract's keys.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
@@ -79,11 +80,11 @@ pub(crate) fn validate_runs(
     scenario.validate()?;
     filters.validate()?;
     if realisations == 0 {
-        return Err(HomotopyError::InvalidParameter {
+        return Err(HomotopyError::Param(ParamError {
             name: "realisations R",
             value: 0.0,
             reason: "at least one realisation is needed",
-        });
+        }));
     }
     Ok(())
 }

@@ -12,6 +12,7 @@ use crate::model::{Realisation, ScenarioConfig};
 use crate::ohf::OhfConfig;
 use crate::quadrature::PolarGridConfig;
 use pf_core::kalman::UkfParams;
+use pf_core::params::ParamError;
 use rand::Rng;
 
 /// The algorithms compared in Fig. 3.
@@ -86,11 +87,11 @@ impl FilterSettings {
         self.aohf.validate()?;
         self.grid.validate()?;
         if self.particles == 0 {
-            return Err(crate::error::HomotopyError::InvalidParameter {
+            return Err(crate::error::HomotopyError::Param(ParamError {
                 name: "N (particles)",
                 value: 0.0,
                 reason: "the PF needs at least one particle",
-            });
+            }));
         }
         pf_core::kalman::Ukf::new(self.ukf)?;
         Ok(())

@@ -26,9 +26,9 @@ use crate::error::{HomotopyError, Result, check_data};
 use crate::model::bearing;
 use crate::model::{PriorConfig, Realisation, ScenarioConfig, State};
 use crate::prior::sample_prior;
+use pf_core::gaussian::LN_2PI;
 use pf_core::geometry::wrap_angle;
-
-const LN_2PI: f64 = 1.837_877_066_409_345_5;
+use pf_core::params::ParamError;
 
 /// The BOT state-space model for pf-core: `t = 0` is sampling instant `k = 1`, whose
 /// bearing `y_1` builds the prior (so the filter is given `None` there).
@@ -56,11 +56,11 @@ impl BotModel {
         scenario.validate()?;
         check_data("bearing", 1, y1)?;
         let q = scenario.q_matrix();
-        let chol = q.cholesky().ok_or(HomotopyError::InvalidParameter {
+        let chol = q.cholesky().ok_or(HomotopyError::Param(ParamError {
             name: "q",
             value: scenario.q,
             reason: "Q must be positive definite",
-        })?;
+        }))?;
         let lq = chol.l();
         let ln_det_q = 2.0 * (0..4).map(|i| lq[(i, i)].ln()).sum::<f64>();
         Ok(Self {
@@ -204,7 +204,7 @@ impl Proposal<BotModel> for LinearisedOptimal {
 pub fn particle_filter(
     model: BotModel,
     n: usize,
-) -> Result<ParticleFilter<BotModel, Guided<LinearisedOptimal>, Resampler>> {
+) -> Result<ParticleFilter<BotModel, Guided<LinearisedOptimal>>> {
     let cfg = FilterConfig {
         n_particles: n,
         resampler: Resampler::Systematic,

@@ -8,6 +8,7 @@ use crate::error::{MpfError, Result};
 use crate::mpf::MpfConfig;
 use crate::radar::{Partition, RadarConfig, run_partition};
 use pf_core::mc::stream_rng;
+use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// Configuration of Fig. 3.
@@ -61,11 +62,11 @@ impl Fig3Config {
         self.calibration.validate()?;
         MpfConfig::new(self.n_particles).validate()?;
         if self.reps == 0 {
-            return Err(MpfError::InvalidParameter {
+            return Err(MpfError::Param(ParamError {
                 name: "reps",
                 value: 0.0,
                 reason: "must be at least 1",
-            });
+            }));
         }
         Ok(())
     }

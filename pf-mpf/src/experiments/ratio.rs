@@ -3,6 +3,7 @@
 use super::Scale;
 use crate::complexity::{CtCase, EfCoefficients, particle_ratio};
 use crate::error::{MpfError, Result};
+use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// Configuration of the ratio curves.
@@ -46,18 +47,18 @@ impl RatioConfig {
     pub fn validate(&self) -> Result<()> {
         self.coefficients.validate()?;
         if self.m_min <= self.n || self.m_max < self.m_min {
-            return Err(MpfError::InvalidParameter {
+            return Err(MpfError::Param(ParamError {
                 name: "m_min",
                 value: self.m_min as f64,
                 reason: "need n < m_min ≤ m_max",
-            });
+            }));
         }
         if !(self.n_pf.is_finite() && self.n_pf > 0.0) {
-            return Err(MpfError::InvalidParameter {
+            return Err(MpfError::Param(ParamError {
                 name: "N_PF",
                 value: self.n_pf,
                 reason: "must be positive",
-            });
+            }));
         }
         Ok(())
     }

@@ -11,6 +11,7 @@ use crate::mpf::MpfConfig;
 use crate::radar::{Partition, RadarConfig, RadarState, run_partition};
 use pf_core::mc::{Par, stream_rng, try_replicate};
 use pf_core::metrics::{rmse, rmse_per_step};
+use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
 
 /// Configuration of Tables II and III.
@@ -74,11 +75,11 @@ impl TableConfig {
             ("n_min", self.n_min),
         ] {
             if v == 0 {
-                return Err(MpfError::InvalidParameter {
+                return Err(MpfError::Param(ParamError {
                     name,
                     value: 0.0,
                     reason: "must be at least 1",
-                });
+                }));
             }
         }
         if self.partitions.first().is_none_or(|p| p.k() != 0) {

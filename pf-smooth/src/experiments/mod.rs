@@ -22,7 +22,7 @@ use crate::em::{
     Estimator, ParticleSchedule, StochasticEm, paper_filter_config, particle_statistics,
     run_statistics,
 };
-use crate::error::{Result, at_least_one};
+use crate::error::Result;
 use crate::exact::{exact_em, exact_em_step, exact_statistics};
 use crate::fixed_lag::FixedLag;
 use crate::path_space::PathSpace;
@@ -30,6 +30,7 @@ use pf_core::filter::ParticleFilter;
 use pf_core::mc::{Par, stream_rng, try_replicate};
 use pf_core::models::NoisyAr1;
 use pf_core::observe::{Observer, StepView};
+use pf_core::params::at_least_one;
 use serde::{Deserialize, Serialize};
 
 /// Where an experiment's observations `Y_0…Y_n` come from.
@@ -139,7 +140,7 @@ impl EmConfig {
     /// Check σ, ρ > 0, φ finite, N, R ≥ 1, δ ≥ 1.
     ///
     /// # Errors
-    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
+    /// [`SmoothError::Param`](crate::SmoothError::Param) naming the argument.
     pub fn validate(&self) -> Result<Theta> {
         let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
         at_least_one("particles", self.particles)?;
@@ -246,7 +247,7 @@ impl SemConfig {
     /// Check σ, ρ > 0, φ finite, N, C ≥ 1, and C no more than a machine can hold.
     ///
     /// # Errors
-    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
+    /// [`SmoothError::Param`](crate::SmoothError::Param) naming the argument.
     pub fn validate(&self) -> Result<Theta> {
         let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
         at_least_one("particles", self.particles)?;
@@ -330,7 +331,7 @@ impl ScoreConfig {
     /// Check σ, ρ > 0, φ finite, N, R ≥ 1.
     ///
     /// # Errors
-    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
+    /// [`SmoothError::Param`](crate::SmoothError::Param) naming the argument.
     pub fn validate(&self) -> Result<Theta> {
         let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
         at_least_one("particles", self.particles)?;
@@ -399,7 +400,7 @@ impl LagSweepConfig {
     /// Check σ, ρ > 0, φ finite, N, R ≥ 1, at least one lag, every lag ≥ 1.
     ///
     /// # Errors
-    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) naming the argument.
+    /// [`SmoothError::Param`](crate::SmoothError::Param) naming the argument.
     pub fn validate(&self) -> Result<Theta> {
         let theta = Theta::from_std(self.phi, self.sigma, self.rho)?;
         at_least_one("particles", self.particles)?;

@@ -12,11 +12,12 @@ use super::{
 };
 use crate::ar1::{Ar1Data, Theta};
 use crate::em::paper_filter_config;
-use crate::error::{Result, at_least_one};
+use crate::error::Result;
 use pf_core::filter::ParticleFilter;
 use pf_core::genealogy::Genealogy;
 use pf_core::mc::{mean_and_se, stream_rng};
 use pf_core::observe::{CloudRecorder, EssRecorder, GenealogyRecorder};
+use pf_core::params::at_least_one;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
@@ -119,7 +120,7 @@ impl SmoothConfig {
     /// sweep, and a short length within the data.
     ///
     /// # Errors
-    /// [`SmoothError::InvalidParameter`](crate::SmoothError::InvalidParameter) or
+    /// [`SmoothError::Param`](crate::SmoothError::Param) or
     /// [`SmoothError::TooFewObservations`](crate::SmoothError::TooFewObservations).
     pub fn validate(&self) -> Result<()> {
         self.truth.validate()?;

@@ -103,7 +103,7 @@ const PAPER: &str = "smooth";
 /// Argument errors (σ ≤ 0, N = 0, …) are [`VizError::Argument`]; the rest is the paper's.
 fn wrap(e: SmoothError) -> VizError {
     match e {
-        SmoothError::InvalidParameter { .. } => VizError::Argument {
+        SmoothError::Param(_) => VizError::Argument {
             message: format!("{PAPER}: {e}"),
         },
         e => VizError::paper(PAPER)(e),
