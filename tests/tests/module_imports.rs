@@ -175,9 +175,7 @@ fn imports(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
     graph
 }
 
-/// `png/` and `rrd/` import nothing from `report/` or from each other, and no two files
-/// of pf-viz import each other.
-
+/// The `src/` directory of a workspace crate.
 fn src_of(krate: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("..")
