@@ -1,6 +1,6 @@
 //! The engine's error type: every variant says what went wrong and where.
 
-pub use crate::params::ParamError;
+pub use crate::params::{ParamError, Shown};
 use thiserror::Error;
 
 /// Errors returned by pf-core. Variants carry the time step, index or parameter at fault.
@@ -93,45 +93,5 @@ impl CoreError {
     }
 }
 
-/// A parameter's value in an error message: as written for ordinary magnitudes, in
-/// exponent form for extreme ones (`1e-300`, not three hundred digits; `1.8446744073709552e19`
-/// for a count that came in as `usize::MAX`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Shown(pub f64);
-
-impl std::fmt::Display for Shown {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let a = self.0.abs();
-        if a == 0.0 || !a.is_finite() || (1e-4..1e15).contains(&a) {
-            write!(f, "{}", self.0)
-        } else {
-            write!(f, "{:e}", self.0)
-        }
-    }
-}
-
 /// Result alias for pf-core.
 pub type Result<T, E = CoreError> = std::result::Result<T, E>;
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Ordinary values read as written; extreme ones in exponent form, not hundreds of digits.
-    #[test]
-    fn parameter_values_are_shown_readably() {
-        let shown = |v: f64| Shown(v).to_string();
-        assert_eq!(shown(0.0), "0");
-        assert_eq!(shown(-2.5), "-2.5");
-        assert_eq!(shown(1000.0), "1000");
-        assert_eq!(shown(f64::NAN), "NaN");
-        assert_eq!(shown(1e-300), "1e-300");
-        assert_eq!(shown(usize::MAX as f64), "1.8446744073709552e19");
-        let e = CoreError::Param(ParamError {
-            name: "budget",
-            value: 1e308,
-            reason: "too large",
-        });
-        assert_eq!(e.to_string(), "invalid parameter budget = 1e308: too large");
-    }
-}

@@ -5,8 +5,24 @@
 //! the parameter, its value and the valid range. Every crate's error enum wraps
 //! [`ParamError`] (`#[error(transparent)] Param(#[from] ParamError)`), so `?` converts it.
 
-use crate::error::Shown;
 use thiserror::Error;
+
+/// A parameter's value in an error message: as written for ordinary magnitudes, in
+/// exponent form for extreme ones (`1e-300`, not three hundred digits; `1.8446744073709552e19`
+/// for a count that came in as `usize::MAX`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shown(pub f64);
+
+impl std::fmt::Display for Shown {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let a = self.0.abs();
+        if a == 0.0 || !a.is_finite() || (1e-4..1e15).contains(&a) {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
+}
 
 /// A parameter outside its valid range: `invalid parameter {name} = {value}: {reason}`.
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
@@ -86,6 +102,25 @@ pub fn at_least_one(name: &'static str, n: usize) -> Checked<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::CoreError;
+
+    /// Ordinary values read as written; extreme ones in exponent form, not hundreds of digits.
+    #[test]
+    fn parameter_values_are_shown_readably() {
+        let shown = |v: f64| Shown(v).to_string();
+        assert_eq!(shown(0.0), "0");
+        assert_eq!(shown(-2.5), "-2.5");
+        assert_eq!(shown(1000.0), "1000");
+        assert_eq!(shown(f64::NAN), "NaN");
+        assert_eq!(shown(1e-300), "1e-300");
+        assert_eq!(shown(usize::MAX as f64), "1.8446744073709552e19");
+        let e = CoreError::Param(ParamError {
+            name: "budget",
+            value: 1e308,
+            reason: "too large",
+        });
+        assert_eq!(e.to_string(), "invalid parameter budget = 1e308: too large");
+    }
 
     /// Each check passes its valid values through unchanged and rejects the edges of its
     /// range, NaN and the infinities, naming the parameter and the value.
