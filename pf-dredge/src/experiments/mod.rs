@@ -19,6 +19,7 @@ mod fig7;
 mod fig8;
 mod lag;
 mod n_sweep;
+mod online;
 
 pub use cycle::{CycleConfig, cycle};
 pub use fig5_6::{Fig56Config, Fig56Result, PaperResiduals, ResidualReport, fig5_6};
@@ -26,6 +27,7 @@ pub use fig7::{Fig7Config, Fig7Result, fig7};
 pub use fig8::{Band, Fig8Config, Fig8Result, fig8};
 pub use lag::{FLAT_WINDOW, FlatStretch, NOISE_FLOOR, best_lag, flat_stretch};
 pub use n_sweep::{NSweepConfig, NSweepResult, NSweepRow, n_sweep};
+pub use online::{Cloud, OnlineConfig, OnlineResult, online};
 /// Fig. 6's histograms are pf-core's (re-exported where they used to be defined).
 pub use pf_core::metrics::Histogram;
 

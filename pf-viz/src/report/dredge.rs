@@ -565,7 +565,13 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     if ctx.write_rrd() {
         #[cfg(feature = "rrd")]
         {
-            crate::rrd::dredge::save(&ctx.path("dredge.rrd"), &c, &fig5_6_config.filter, seed)?;
+            let run = ex::online(&ex::OnlineConfig {
+                cycle: cycle_config,
+                filter: fig5_6_config.filter,
+                ..ex::OnlineConfig::at_scale(ctx.scale)
+            })
+            .map_err(err)?;
+            crate::rrd::dredge::save(&ctx.path("dredge.rrd"), &run)?;
             files.push("dredge.rrd".to_owned());
         }
     }

@@ -9,17 +9,13 @@
 
 use std::path::Path;
 
-use pf_core::mc::stream_rng;
-use pf_dredge::EstimatorConfig;
-use pf_dredge::OnlineEstimator;
-use pf_dredge::model::{Q_O, RHO_O};
-use pf_dredge::simulator::Cycle;
+use pf_dredge::experiments::OnlineResult;
 use rerun::components::Radius;
 use rerun::{Points2D, RecordingStream, Scalars, SeriesLines};
 
 use super::layout::{self, Bounds, Corner, Node, View};
 use super::{TIME, rrd_err, save_rrd};
-use crate::error::{Result, VizError};
+use crate::error::Result;
 
 const ROOT: &str = "dredge";
 const BLUE: [u8; 4] = [60, 110, 220, 255];
@@ -37,12 +33,12 @@ fn at(q: f64, rho: f64) -> [f32; 2] {
     [(q * Q_SCALE) as f32, (-rho) as f32]
 }
 
-/// Estimate `cycle` on line with `cfg` (stream 0 of `seed`) and record it to `path`.
+/// Record `run` (pf-dredge's [`online`](pf_dredge::experiments::online)) to `path`.
 ///
 /// # Errors
-/// A failed filter step, or a recording or I/O error naming `path`.
-pub fn save(path: &Path, cycle: &Cycle, cfg: &EstimatorConfig, seed: u64) -> Result<()> {
-    save_rrd(path, "dredge", |rec, path| log(rec, path, cycle, cfg, seed))
+/// A recording or I/O error naming `path`.
+pub fn save(path: &Path, run: &OnlineResult) -> Result<()> {
+    save_rrd(path, "dredge", |rec, path| log(rec, path, run))
 }
 
 fn series(
@@ -62,13 +58,8 @@ fn series(
     .map_err(rrd_err(path))
 }
 
-fn log(
-    rec: &RecordingStream,
-    path: &Path,
-    cycle: &Cycle,
-    cfg: &EstimatorConfig,
-    seed: u64,
-) -> Result<()> {
+fn log(rec: &RecordingStream, path: &Path, run: &OnlineResult) -> Result<()> {
+    let cycle = &run.cycle;
     let err = rrd_err(path);
     layout::send(rec, &blueprint(), Some(TIME)).map_err(&err)?;
     for (e, n, c) in [
@@ -105,14 +96,8 @@ fn log(
     )
     .map_err(&err)?;
 
-    let data = cycle.to_data();
-    let mut online = OnlineEstimator::new(cfg).map_err(VizError::paper("dredge"))?;
-    let mut rng = stream_rng(seed, 0);
-    let mut cloud: Vec<[f32; 2]> = Vec::with_capacity(cfg.n_particles);
-    for k in 0..data.len() {
-        let est = online
-            .push(&data.sample(k), &mut rng)
-            .map_err(VizError::paper("dredge"))?;
+    let mut clouds = run.clouds.iter().peekable();
+    for (k, &[q_o, rho_o]) in run.estimates.iter().enumerate() {
         // Whole seconds as a sequence: the viewer then opens the series on the whole cycle
         // (a duration timeline opens them on the last minute).
         rec.set_time_sequence(TIME, cycle.t[k].round() as i64);
@@ -123,22 +108,20 @@ fn log(
             ("mass/true", cycle.m_t[k]),
             ("Q/Q_i", cycle.q_i[k]),
             ("Q/Q_o_true", cycle.q_o[k]),
-            ("Q/Q_o_pf", est.q_o),
+            ("Q/Q_o_pf", q_o),
             ("rho/rho_i", cycle.rho_i[k]),
             ("rho/rho_o_true", cycle.rho_o[k]),
-            ("rho/rho_o_pf", est.rho_o),
+            ("rho/rho_o_pf", rho_o),
         ];
         for (e, v) in scalars {
             rec.log(format!("{ROOT}/signals/{e}"), &Scalars::single(v))
                 .map_err(&err)?;
         }
-        if k % 2 == 0 {
-            if let Some(pf) = online.filter() {
-                cloud.clear();
-                cloud.extend(pf.particles().iter().map(|x| at(x[Q_O], x[RHO_O])));
+        if k % run.cloud_every == 0 {
+            if let Some(cloud) = clouds.next_if(|c| c.k == k) {
                 rec.log(
                     format!("{ROOT}/cloud/particles"),
-                    &Points2D::new(cloud.iter().copied())
+                    &Points2D::new(cloud.points.iter().map(|&[q, rho]| at(q, rho)))
                         .with_colors([GREY])
                         .with_radii([Radius::new_ui_points(1.5)]),
                 )
@@ -146,7 +129,7 @@ fn log(
             }
             rec.log(
                 format!("{ROOT}/cloud/estimate"),
-                &Points2D::new([at(est.q_o, est.rho_o)])
+                &Points2D::new([at(q_o, rho_o)])
                     .with_colors([RED])
                     .with_radii([Radius::new_ui_points(6.0)])
                     .with_labels(["PF estimate"]),
