@@ -26,7 +26,6 @@ fi
 export PF_RERUN="$venv/bin/rerun"
 "$PF_RERUN" --version >&2
 
-cargo test --workspace
-# The tests that need the Rerun CLI are #[ignore]d by a plain `cargo test`; run them here
-# (with --workspace, so that Cargo resolves the same features and rebuilds nothing).
-cargo test --workspace --test report -- --ignored
+# The tests that need the Rerun CLI are #[ignore]d by a plain `cargo test`; here they run
+# with the rest, in one pass, so the quick report they check is rendered once.
+cargo test --workspace -- --include-ignored

@@ -3,7 +3,8 @@
 //! tools, and the pages carry every figure and table without reaching for the network.
 //!
 //! The tests that run the Rerun CLI are `#[ignore]`d by a plain `cargo test`: they need
-//! `PF_RERUN` to name it, fail when it does not, and `scripts/test.sh` runs them.
+//! `PF_RERUN` to name it, fail when it does not, and `scripts/test.sh` runs them with
+//! `--include-ignored`.
 
 mod common;
 
@@ -135,6 +136,10 @@ fn every_paper_has_a_recording() {
     }
 }
 
+/// Every recording passes `rerun rrd verify` of the rerun crate's version.
+// Ignored by a plain `cargo test` only because the official Rerun CLI is a Python package
+// outside cargo's reach; `scripts/test.sh` (the README's test command, which CI runs)
+// installs it, sets `PF_RERUN` and runs this test with `--include-ignored`.
 #[test]
 #[ignore = "needs the Rerun CLI: run scripts/test.sh or set PF_RERUN"]
 fn every_recording_loads_in_the_official_rerun_tools() {
@@ -156,6 +161,8 @@ fn every_recording_loads_in_the_official_rerun_tools() {
 
 /// The layouts carry the view properties the SDK's builder cannot set: the dredger's four
 /// time series open on the whole cycle, and the views of moving scenes on fixed frames.
+// Ignored by a plain `cargo test` for the same reason as the test above; `scripts/test.sh`
+// runs it.
 #[test]
 #[ignore = "needs the Rerun CLI: run scripts/test.sh or set PF_RERUN"]
 fn recordings_open_on_whole_runs_and_fixed_frames() {
