@@ -19,7 +19,10 @@ mod report;
 mod sir;
 
 pub use crate::model::StepAt;
-pub use batch::{BatchBootstrap, BatchConfig, ScalarModel, default_chunk};
+pub use batch::{
+    BatchBootstrap, BatchConfig, BatchModel, BatchProposal, BatchTransitionDensity, Cols, ColsMut,
+    ScalarModel, default_chunk,
+};
 pub use mutation::{Bootstrap, Guided, Mutation};
 pub use policy::{EssThreshold, ResamplePolicy};
 pub use report::{RunSummary, StepReport};

@@ -54,20 +54,8 @@ use crate::simd::{LaneRng, Simd, dispatch, prefetch};
 use rand::RngExt;
 use rayon::prelude::*;
 
-/// A model with a scalar state, written in terms of standard normal noise so that the
-/// fast path can feed it pre-drawn or chunk-local draws.
-///
-/// Implement the three methods as `#[inline]` arithmetic (no branches, no allocation) and
-/// the filter's loops over them vectorise. `Send` and `Sync`, since a run's steps may go to
-/// another thread of the pool (see [`BatchBootstrap::run`]).
-pub trait ScalarModel: Send + Sync {
-    /// `X_0` from a standard normal `z`.
-    fn initial_from_normal(&self, z: f64) -> f64;
-    /// `X_t` from `x_prev` and a standard normal `z`.
-    fn transition_from_normal(&self, t: usize, x_prev: f64, z: f64) -> f64;
-    /// `log g_t(y | x)`.
-    fn log_likelihood_scalar(&self, t: usize, x: f64, y: f64) -> f64;
-}
+mod model;
+pub use model::{BatchModel, BatchProposal, BatchTransitionDensity, Cols, ColsMut, ScalarModel};
 
 /// Configuration of [`BatchBootstrap`].
 #[derive(Debug, Clone, Copy, PartialEq)]
