@@ -3,6 +3,8 @@
 
 pub mod ohf_tracker;
 pub mod pf;
+#[doc(hidden)]
+pub mod pf_old;
 pub mod ukf_lpc;
 
 use serde::{Deserialize, Serialize};
@@ -117,6 +119,6 @@ pub fn track<R: Rng + ?Sized>(
         Algorithm::Ohf => ohf_tracker::run(scenario, &settings.ohf, &settings.grid, realisation),
         Algorithm::Aohf => ohf_tracker::run(scenario, &settings.aohf, &settings.grid, realisation),
         Algorithm::UkfLpc => ukf_lpc::run(scenario, settings.ukf, realisation),
-        Algorithm::Pf => pf::run(scenario, settings.particles, realisation, rng),
+        Algorithm::Pf => pf_old::run(scenario, settings.particles, realisation, rng),
     }
 }
