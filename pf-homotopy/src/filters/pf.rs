@@ -25,13 +25,18 @@
 use std::f64::consts::{PI, TAU};
 
 use nalgebra::Matrix4;
-use pf_core::filter::{BatchModel, BatchProposal, BatchTransitionDensity, Cols, ColsMut};
+use pf_core::filter::{
+    BatchConfig, BatchFilter, BatchModel, BatchProposal, BatchTransitionDensity, Cols, ColsMut,
+    EssThreshold, Guided, ResamplePolicy,
+};
 use pf_core::gaussian::LN_2PI;
+use pf_core::mc::Par;
 use pf_core::params::ParamError;
+use pf_core::resample::Resampler;
 use pf_core::simd::special::{atan2, ln};
 
 use crate::error::{HomotopyError, Result, check_data};
-use crate::model::{PriorConfig, ScenarioConfig};
+use crate::model::{PriorConfig, Realisation, ScenarioConfig};
 
 /// The law of `X_0` (sampling instant `k = 1`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,22 +61,121 @@ enum Measurement {
     Linear([f64; 2]),
 }
 
+/// The numbers of the dynamics (18)–(20) and the likelihood (21), copied into each chunk
+/// loop (so that LLVM sees them as loop constants).
+///
+/// Q of (20) is `B ⊗ I₂` for a 2 × 2 block `B = q [[T³/3, T²/2], [T²/2, T]]` over
+/// (position, velocity) of each axis, and so are its Cholesky factor and its inverse: the
+/// loops use the blocks' three distinct entries rather than 4 × 4 matrices, half of whose
+/// entries are zeros that would still cost a multiplication each.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Dynamics {
+    /// Sampling period T of F (19).
+    t: f64,
+    /// B: `[[pp, pv], [pv, vv]]`.
+    q_pp: f64,
+    q_pv: f64,
+    /// The lower Cholesky factor of B: `[[l_pp, 0], [l_vp, l_vv]]`.
+    l_pp: f64,
+    l_vp: f64,
+    l_vv: f64,
+    /// B⁻¹.
+    i_pp: f64,
+    i_pv: f64,
+    i_vv: f64,
+    /// `log det Q = 2 log det B`.
+    ln_det_q: f64,
+    sigma: f64,
+    /// `1/σ` and `1/σ²`.
+    inv_sigma: f64,
+    inv_s2: f64,
+    ln_sigma: f64,
+}
+
+impl Dynamics {
+    /// From Q of (20) (which must have the block form, as `ScenarioConfig::q_matrix`'s has)
+    /// and σ.
+    fn new(t: f64, q: &Matrix4<f64>, sigma: f64) -> Self {
+        let (q_pp, q_pv, q_vv) = (q[(0, 0)], q[(0, 2)], q[(2, 2)]);
+        let l_pp = q_pp.sqrt();
+        let l_vp = q_pv / l_pp;
+        let l_vv = (q_vv - l_vp * l_vp).sqrt();
+        let det = q_pp * q_vv - q_pv * q_pv;
+        Dynamics {
+            t,
+            q_pp,
+            q_pv,
+            l_pp,
+            l_vp,
+            l_vv,
+            i_pp: q_vv / det,
+            i_pv: -q_pv / det,
+            i_vv: q_pp / det,
+            ln_det_q: 2.0 * det.ln(),
+            sigma,
+            inv_sigma: 1.0 / sigma,
+            inv_s2: 1.0 / (sigma * sigma),
+            ln_sigma: sigma.ln(),
+        }
+    }
+
+    /// `F x` of eq. (19).
+    #[inline(always)]
+    fn predict(&self, x: [f64; 4]) -> [f64; 4] {
+        [x[0] + self.t * x[2], x[1] + self.t * x[3], x[2], x[3]]
+    }
+
+    /// `L_Q z`.
+    #[inline(always)]
+    fn chol_mul(&self, z: [f64; 4]) -> [f64; 4] {
+        [
+            self.l_pp * z[0],
+            self.l_pp * z[1],
+            self.l_vp * z[0] + self.l_vv * z[2],
+            self.l_vp * z[1] + self.l_vv * z[3],
+        ]
+    }
+
+    /// `dᵀ Q⁻¹ d`.
+    #[inline(always)]
+    fn quad_q_inv(&self, d: [f64; 4]) -> f64 {
+        let axis = |p: f64, v: f64| self.i_pp * p * p + 2.0 * self.i_pv * p * v + self.i_vv * v * v;
+        axis(d[0], d[2]) + axis(d[1], d[3])
+    }
+
+    /// `log N(x; F x_prev, Q)`, eq. (18).
+    #[inline(always)]
+    fn log_transition(&self, xp: [f64; 4], x: [f64; 4]) -> f64 {
+        let m = self.predict(xp);
+        let d = [x[0] - m[0], x[1] - m[1], x[2] - m[2], x[3] - m[3]];
+        -0.5 * (4.0 * LN_2PI + self.ln_det_q + self.quad_q_inv(d))
+    }
+
+    /// `log N(r; 0, σ²)` of a residual `r`, eqs. (21)–(22).
+    #[inline(always)]
+    fn log_g(&self, r: f64) -> f64 {
+        let e = r * self.inv_sigma;
+        -0.5 * (LN_2PI + e * e) - self.ln_sigma
+    }
+}
+
+/// `L z` for a lower-triangular `L`.
+#[inline(always)]
+fn lower_mul(l: &[[f64; 4]; 4], z: [f64; 4]) -> [f64; 4] {
+    [
+        l[0][0] * z[0],
+        l[1][0] * z[0] + l[1][1] * z[1],
+        l[2][0] * z[0] + l[2][1] * z[1] + l[2][2] * z[2],
+        l[3][0] * z[0] + l[3][1] * z[1] + l[3][2] * z[2] + l[3][3] * z[3],
+    ]
+}
+
 /// The BOT state-space model of Section 3 over chunks of particles (columns `x, y, ẋ, ẏ`):
 /// `t = 0` is sampling instant `k = 1`, whose bearing `y_1` builds the prior (so the filter
 /// is given `None` there).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BotModel {
-    /// Sampling period T of F (19).
-    t: f64,
-    /// Lower Cholesky factor of Q (20), row-major.
-    lq: [[f64; 4]; 4],
-    /// Q.
-    q: [[f64; 4]; 4],
-    /// Q⁻¹.
-    q_inv: [[f64; 4]; 4],
-    ln_det_q: f64,
-    sigma: f64,
-    ln_sigma: f64,
+    dynamics: Dynamics,
     /// Observer positions ρ at `t = 0, 1, …`.
     observer: Vec<[f64; 2]>,
     initial: Initial,
@@ -142,21 +246,15 @@ impl BotModel {
     ) -> Result<Self> {
         scenario.validate()?;
         let q = scenario.q_matrix();
-        let chol = q.cholesky().ok_or(HomotopyError::Param(ParamError {
-            name: "q",
-            value: scenario.q,
-            reason: "Q must be positive definite",
-        }))?;
-        let lq = chol.l();
-        let ln_det_q = 2.0 * (0..4).map(|i| lq[(i, i)].ln()).sum::<f64>();
+        if q.cholesky().is_none() {
+            return Err(HomotopyError::Param(ParamError {
+                name: "q",
+                value: scenario.q,
+                reason: "Q must be positive definite",
+            }));
+        }
         Ok(Self {
-            t: scenario.t,
-            lq: rows(&lq),
-            q: rows(&q),
-            q_inv: rows(&chol.inverse()),
-            ln_det_q,
-            sigma: scenario.sigma(),
-            ln_sigma: scenario.sigma().ln(),
+            dynamics: Dynamics::new(scenario.t, &q, scenario.sigma()),
             observer,
             initial,
             measurement,
@@ -166,46 +264,6 @@ impl BotModel {
     /// The observer's position at `t` (the last one past the end).
     fn rho(&self, t: usize) -> [f64; 2] {
         self.observer[t.min(self.observer.len() - 1)]
-    }
-
-    /// `F x` of eq. (19).
-    #[inline(always)]
-    fn predict(&self, x: [f64; 4]) -> [f64; 4] {
-        [x[0] + self.t * x[2], x[1] + self.t * x[3], x[2], x[3]]
-    }
-
-    /// `L z` for a lower-triangular `L`.
-    #[inline(always)]
-    fn lower_mul(l: &[[f64; 4]; 4], z: [f64; 4]) -> [f64; 4] {
-        [
-            l[0][0] * z[0],
-            l[1][0] * z[0] + l[1][1] * z[1],
-            l[2][0] * z[0] + l[2][1] * z[1] + l[2][2] * z[2],
-            l[3][0] * z[0] + l[3][1] * z[1] + l[3][2] * z[2] + l[3][3] * z[3],
-        ]
-    }
-
-    /// `dᵀ Q⁻¹ d`.
-    #[inline(always)]
-    fn quad_q_inv(&self, d: [f64; 4]) -> f64 {
-        let m = &self.q_inv;
-        let row = |i: usize| m[i][0] * d[0] + m[i][1] * d[1] + m[i][2] * d[2] + m[i][3] * d[3];
-        d[0] * row(0) + d[1] * row(1) + d[2] * row(2) + d[3] * row(3)
-    }
-
-    /// `log N(x; F x_prev, Q)`, eq. (18).
-    #[inline(always)]
-    fn log_transition(&self, xp: [f64; 4], x: [f64; 4]) -> f64 {
-        let m = self.predict(xp);
-        let d = [x[0] - m[0], x[1] - m[1], x[2] - m[2], x[3] - m[3]];
-        -0.5 * (4.0 * LN_2PI + self.ln_det_q + self.quad_q_inv(d))
-    }
-
-    /// `log N(r; 0, σ²)` of a residual `r`, eqs. (21)–(22).
-    #[inline(always)]
-    fn log_g(&self, r: f64) -> f64 {
-        let e = r / self.sigma;
-        -0.5 * (LN_2PI + e * e) - self.ln_sigma
     }
 }
 
@@ -225,25 +283,28 @@ fn wrap(a: f64) -> f64 {
 /// ∂h/∂y)`.
 #[inline(always)]
 fn bearing_and_gradient(dx: f64, dy: f64) -> (f64, f64, f64) {
-    let r2 = dx * dx + dy * dy;
-    (atan2(dy, dx), -dy / r2, dx / r2)
+    let inv_r2 = 1.0 / (dx * dx + dy * dy);
+    (atan2(dy, dx), -dy * inv_r2, dx * inv_r2)
 }
 
-/// Four columns as an array of slices of the chunk's length.
+/// The first `K` columns, each cut to the chunk's length (so that indexing below it needs
+/// no bound check).
 #[inline(always)]
-fn four(c: Cols<'_>) -> [&[f64]; 4] {
+fn cols<const K: usize>(c: Cols<'_>) -> [&[f64]; K] {
     let n = c.len();
-    c.split::<4>().map(|s| &s[..n])
+    c.split::<K>().map(|s| &s[..n])
 }
 
 impl BatchModel for BotModel {
     type Obs = f64;
     type Input = ();
 
+    #[inline(always)]
     fn dim(&self) -> usize {
         4
     }
 
+    #[inline(always)]
     fn noise_dim(&self) -> usize {
         4
     }
@@ -252,15 +313,16 @@ impl BatchModel for BotModel {
     /// normals `z`, see [`crate::prior::sample_prior`]), or the Gaussian one.
     fn initial(&self, z: Cols<'_>, mut x: ColsMut<'_>) {
         let n = x.len();
-        let zs = four(z);
+        let [z0, z1, z2, z3] = cols::<4>(z);
         let [x0, x1, x2, x3] = x.split_mut::<4>();
         match self.initial {
             Initial::Polar { prior, y1, rho } => {
+                let sigma = self.dynamics.sigma;
                 for i in 0..n {
-                    let r = prior.range_mean + prior.range_sd * zs[0][i];
-                    let b = y1 + self.sigma * zs[1][i];
-                    let s = prior.speed_mean + prior.speed_sd * zs[2][i];
-                    let h = prior.heading_mean + prior.heading_sd * zs[3][i];
+                    let r = prior.range_mean + prior.range_sd * z0[i];
+                    let b = y1 + sigma * z1[i];
+                    let s = prior.speed_mean + prior.speed_sd * z2[i];
+                    let h = prior.heading_mean + prior.heading_sd * z3[i];
                     x0[i] = rho[0] + r * b.cos();
                     x1[i] = rho[1] + r * b.sin();
                     x2[i] = s * h.cos();
@@ -269,7 +331,7 @@ impl BatchModel for BotModel {
             }
             Initial::Gaussian { mean, chol } => {
                 for i in 0..n {
-                    let d = Self::lower_mul(&chol, [zs[0][i], zs[1][i], zs[2][i], zs[3][i]]);
+                    let d = lower_mul(&chol, [z0[i], z1[i], z2[i], z3[i]]);
                     x0[i] = mean[0] + d[0];
                     x1[i] = mean[1] + d[1];
                     x2[i] = mean[2] + d[2];
@@ -283,12 +345,14 @@ impl BatchModel for BotModel {
     #[inline(always)]
     fn propagate(&self, _t: usize, _u: &(), parents: Cols<'_>, z: Cols<'_>, mut x: ColsMut<'_>) {
         let n = x.len();
-        let (p, zs) = (four(parents), four(z));
+        let [p0, p1, p2, p3] = cols::<4>(parents);
+        let [z0, z1, z2, z3] = cols::<4>(z);
         let [x0, x1, x2, x3] = x.split_mut::<4>();
         let (x0, x1, x2, x3) = (&mut x0[..n], &mut x1[..n], &mut x2[..n], &mut x3[..n]);
+        let c = self.dynamics;
         for i in 0..n {
-            let m = self.predict([p[0][i], p[1][i], p[2][i], p[3][i]]);
-            let d = Self::lower_mul(&self.lq, [zs[0][i], zs[1][i], zs[2][i], zs[3][i]]);
+            let m = c.predict([p0[i], p1[i], p2[i], p3[i]]);
+            let d = c.chol_mul([z0[i], z1[i], z2[i], z3[i]]);
             x0[i] = m[0] + d[0];
             x1[i] = m[1] + d[1];
             x2[i] = m[2] + d[2];
@@ -301,19 +365,20 @@ impl BatchModel for BotModel {
     #[inline(always)]
     fn add_log_likelihood(&self, t: usize, &y: &f64, x: Cols<'_>, lw: &mut [f64]) {
         let n = x.len();
-        let [px, py, ..] = four(x);
+        let [px, py] = cols::<2>(x);
         let lw = &mut lw[..n];
+        let c = self.dynamics;
         match self.measurement {
             Measurement::Bearing => {
                 let rho = self.rho(t);
                 for i in 0..n {
                     let h = atan2(py[i] - rho[1], px[i] - rho[0]);
-                    lw[i] += self.log_g(wrap(y - h));
+                    lw[i] += c.log_g(wrap(y - h));
                 }
             }
-            Measurement::Linear(c) => {
+            Measurement::Linear(a) => {
                 for i in 0..n {
-                    lw[i] += self.log_g(y - (c[0] * px[i] + c[1] * py[i]));
+                    lw[i] += c.log_g(y - (a[0] * px[i] + a[1] * py[i]));
                 }
             }
         }
@@ -332,13 +397,12 @@ impl BatchTransitionDensity for BotModel {
         out: &mut [f64],
     ) {
         let n = x.len();
-        let (p, x) = (four(parents), four(x));
+        let [p0, p1, p2, p3] = cols::<4>(parents);
+        let [x0, x1, x2, x3] = cols::<4>(x);
         let out = &mut out[..n];
+        let c = self.dynamics;
         for i in 0..n {
-            out[i] += self.log_transition(
-                [p[0][i], p[1][i], p[2][i], p[3][i]],
-                [x[0][i], x[1][i], x[2][i], x[3][i]],
-            );
+            out[i] += c.log_transition([p0[i], p1[i], p2[i], p3[i]], [x0[i], x1[i], x2[i], x3[i]]);
         }
     }
 }
@@ -361,28 +425,34 @@ impl LinearisedOptimal {
         lin: impl Fn(&[f64; 4]) -> (f64, f64, f64),
     ) {
         let n = x.len();
-        let p = four(parents);
-        let zs: [&[f64]; 5] = z.split::<5>().map(|s| &s[..n]);
+        // Each slice re-cut to the chunk's length and the constants copied out of the model,
+        // so that the loop has no bound check and no load LLVM must assume aliased: it
+        // vectorises.
+        let [p0, p1, p2, p3] = cols::<4>(parents);
+        let [z0, z1, z2, z3, z4] = cols::<5>(z);
         let [x0, x1, x2, x3] = x.split_mut::<4>();
         let (x0, x1, x2, x3) = (&mut x0[..n], &mut x1[..n], &mut x2[..n], &mut x3[..n]);
         let log_q = &mut log_q[..n];
-        let (q, s2) = (&model.q, model.sigma * model.sigma);
+        let c = model.dynamics;
+        let sigma = c.sigma;
+        let s2 = sigma * sigma;
         for i in 0..n {
-            let xb = model.predict([p[0][i], p[1][i], p[2][i], p[3][i]]);
+            let xb = c.predict([p0[i], p1[i], p2[i], p3[i]]);
             let (h0, h1, e) = lin(&xb);
-            // S = H Q Hᵀ + σ², K = Q Hᵀ / S.
-            let qh: [f64; 4] = std::array::from_fn(|r| q[r][0] * h0 + q[r][1] * h1);
+            // Q Hᵀ = (B_pp h₀, B_pp h₁, B_pv h₀, B_pv h₁); S = H Q Hᵀ + σ²; K = Q Hᵀ / S.
+            let qh = [c.q_pp * h0, c.q_pp * h1, c.q_pv * h0, c.q_pv * h1];
             let s = h0 * qh[0] + h1 * qh[1] + s2;
-            let k = qh.map(|v| v / s);
-            let d0 = BotModel::lower_mul(&model.lq, [zs[0][i], zs[1][i], zs[2][i], zs[3][i]]);
+            let inv_s = 1.0 / s;
+            let k = qh.map(|v| v * inv_s);
+            let d0 = c.chol_mul([z0[i], z1[i], z2[i], z3[i]]);
             let xz: [f64; 4] = std::array::from_fn(|r| xb[r] + d0[r]);
-            let innov = e - (h0 * (xz[0] - xb[0]) + h1 * (xz[1] - xb[1])) - model.sigma * zs[4][i];
+            let innov = e - (h0 * (xz[0] - xb[0]) + h1 * (xz[1] - xb[1])) - sigma * z4[i];
             let xi: [f64; 4] = std::array::from_fn(|r| xz[r] + k[r] * innov);
             // d = x − (x̄ + K e); dᵀ Σ*⁻¹ d with Σ*⁻¹ = Q⁻¹ + HᵀH/σ².
             let d: [f64; 4] = std::array::from_fn(|r| xi[r] - (xb[r] + k[r] * e));
             let hd = h0 * d[0] + h1 * d[1];
-            let quad = model.quad_q_inv(d) + hd * hd / s2;
-            let ln_det = model.ln_det_q - ln(s / s2);
+            let quad = c.quad_q_inv(d) + hd * hd * c.inv_s2;
+            let ln_det = c.ln_det_q - ln(s * c.inv_s2);
             log_q[i] = -0.5 * (4.0 * LN_2PI + ln_det + quad);
             x0[i] = xi[0];
             x1[i] = xi[1];
@@ -393,12 +463,14 @@ impl LinearisedOptimal {
 }
 
 impl BatchProposal<BotModel> for LinearisedOptimal {
+    #[inline(always)]
     fn noise_dim(&self, _model: &BotModel) -> usize {
         5
     }
 
     /// With `y_t` the Matheron draw of the linearisation at `F x_{t−1}`; without, the
     /// transition itself (`q = f`).
+    #[inline(always)]
     fn propose(
         &self,
         model: &BotModel,
@@ -430,4 +502,46 @@ impl BatchProposal<BotModel> for LinearisedOptimal {
             }),
         }
     }
+}
+/// The batch filter of Section 4's PF: `n` particles, systematic resampling when the ESS
+/// falls below N/2 (the paper does not say; see the README), chunks' random streams from
+/// `seed`, on `par`.
+pub type BotFilter = BatchFilter<BotModel, Guided<LinearisedOptimal>>;
+
+/// [`BotFilter`] for a model.
+///
+/// # Errors
+/// `n = 0`, or a size past pf-core's limits.
+pub fn particle_filter(model: BotModel, n: usize, seed: u64, par: Par) -> Result<BotFilter> {
+    let cfg = BatchConfig {
+        resampler: Resampler::Systematic,
+        policy: ResamplePolicy::EssBelow(EssThreshold::Fraction(0.5)),
+        par,
+        ..BatchConfig::new(n, seed)
+    };
+    Ok(BatchFilter::guided(model, LinearisedOptimal, cfg)?)
+}
+
+/// Filter a realisation with `n` particles (streams from `seed`, chunks on the current
+/// rayon pool); position means at `k = 1, …, K`.
+///
+/// # Errors
+/// As [`particle_filter`], or a collapse of the weights.
+pub fn run(
+    scenario: &ScenarioConfig,
+    n: usize,
+    real: &Realisation,
+    seed: u64,
+) -> Result<Vec<[f64; 2]>> {
+    let observer: Vec<[f64; 2]> = real.observer.iter().map(|o| o.pos).collect();
+    let model = BotModel::new(scenario, observer, real.bearings[0])?;
+    let mut pf = particle_filter(model, n, seed, Par::Rayon)?;
+    let mut out = Vec::with_capacity(real.bearings.len());
+    let mut m = [0.0; 4];
+    for (k, y) in real.bearings.iter().enumerate() {
+        pf.step((k > 0).then_some(y))?;
+        pf.mean_into(&mut m)?;
+        out.push([m[0], m[1]]);
+    }
+    Ok(out)
 }
