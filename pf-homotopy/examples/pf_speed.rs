@@ -11,6 +11,24 @@ use pf_homotopy::filters::{pf, pf_old};
 use pf_homotopy::model::ScenarioConfig;
 use rand::RngExt;
 
+/// CPU seconds of every thread of this process so far (`/proc/self/task/*/schedstat`), so
+/// that a loaded machine's waiting does not count.
+fn cpu_seconds() -> f64 {
+    let mut ns = 0u64;
+    if let Ok(dir) = std::fs::read_dir("/proc/self/task") {
+        for t in dir.flatten() {
+            if let Ok(s) = std::fs::read_to_string(t.path().join("schedstat")) {
+                ns += s
+                    .split_whitespace()
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or(0);
+            }
+        }
+    }
+    ns as f64 * 1e-9
+}
+
 fn main() -> Result<(), HomotopyError> {
     let realisations: usize = std::env::args()
         .nth(1)
@@ -25,25 +43,28 @@ fn main() -> Result<(), HomotopyError> {
             .build()
             .expect("a pool");
         pool.install(|| -> Result<(), HomotopyError> {
-            let reps = 3;
-            let mut old = Vec::new();
-            let mut new = Vec::new();
+            let reps = 5;
+            let (mut old, mut new, mut old_cpu, mut new_cpu) = (vec![], vec![], vec![], vec![]);
             for r in 0..reps {
-                let t0 = Instant::now();
+                let (t0, c0) = (Instant::now(), cpu_seconds());
                 pf_old::run(&sc, n, &real, &mut stream_rng(2, r))?;
                 old.push(t0.elapsed().as_secs_f64());
-                let t0 = Instant::now();
+                old_cpu.push(cpu_seconds() - c0);
+                let (t0, c0) = (Instant::now(), cpu_seconds());
                 pf::run(&sc, n, &real, r)?;
                 new.push(t0.elapsed().as_secs_f64());
+                new_cpu.push(cpu_seconds() - c0);
             }
             let med = |v: &mut Vec<f64>| {
                 v.sort_by(f64::total_cmp);
                 v[v.len() / 2]
             };
             let (o, b) = (med(&mut old), med(&mut new));
+            let (oc, bc) = (med(&mut old_cpu), med(&mut new_cpu));
             println!(
-                "{threads} thread(s), N = {n}, median of {reps} runs: generic {o:.3} s, batch {b:.3} s, ratio {:.1}",
-                o / b
+                "{threads} thread(s), N = {n}, median of {reps} runs: wall generic {o:.3} s, batch {b:.3} s, ratio {:.1}; CPU generic {oc:.3} s, batch {bc:.3} s, ratio {:.1}",
+                o / b,
+                oc / bc
             );
             Ok(())
         })?;
