@@ -22,8 +22,6 @@
 //! - A. Doucet, S. Godsill, C. Andrieu, "On sequential Monte Carlo sampling methods for
 //!   Bayesian filtering", *Statistics and Computing* 10(3), 2000.
 
-use std::f64::consts::{PI, TAU};
-
 use nalgebra::Matrix4;
 use pf_core::filter::{
     BatchConfig, BatchFilter, BatchModel, BatchProposal, BatchTransitionDensity, Cols, ColsMut,
@@ -267,24 +265,13 @@ impl BotModel {
     }
 }
 
-/// `a` wrapped into `(−π, π]` as [`pf_core::geometry::wrap_angle`] does, branch-free: `a`
-/// itself when it is in range, else `a − 2π·round(a/2π)` (within an ulp of `a`'s modulus
-/// of `wrap_angle`'s value).
+/// The bearing residual `wrap_angle(y − h)` of eq. (22), `h` the bearing of `(dx, dy)`,
+/// from `sin y` and `cos y`: the angle of `(dx, dy)` turned by `−y`, `atan2(sin(y − h),
+/// cos(y − h))`, in `[−π, π]` without a wrap (and within a few ulp of `y` of the wrapped
+/// difference).
 #[inline(always)]
-fn wrap(a: f64) -> f64 {
-    // 1.5·2⁵²: adding it rounds a double below 2⁵¹ to an integer.
-    const MAGIC: f64 = 6_755_399_441_055_744.0;
-    let n = (a * (1.0 / TAU) + MAGIC) - MAGIC;
-    let w = a - n * TAU;
-    if a > -PI && a <= PI { a } else { w }
-}
-
-/// The bearing of `(dx, dy)` and its gradient in the position, eq. (22): `(h, ∂h/∂x,
-/// ∂h/∂y)`.
-#[inline(always)]
-fn bearing_and_gradient(dx: f64, dy: f64) -> (f64, f64, f64) {
-    let inv_r2 = 1.0 / (dx * dx + dy * dy);
-    (atan2(dy, dx), -dy * inv_r2, dx * inv_r2)
+fn residual(sy: f64, cy: f64, dx: f64, dy: f64) -> f64 {
+    atan2(sy * dx - cy * dy, cy * dx + sy * dy)
 }
 
 /// The first `K` columns, each cut to the chunk's length (so that indexing below it needs
@@ -371,9 +358,9 @@ impl BatchModel for BotModel {
         match self.measurement {
             Measurement::Bearing => {
                 let rho = self.rho(t);
+                let (sy, cy) = y.sin_cos();
                 for i in 0..n {
-                    let h = atan2(py[i] - rho[1], px[i] - rho[0]);
-                    lw[i] += c.log_g(wrap(y - h));
+                    lw[i] += c.log_g(residual(sy, cy, px[i] - rho[0], py[i] - rho[1]));
                 }
             }
             Measurement::Linear(a) => {
@@ -492,9 +479,11 @@ impl BatchProposal<BotModel> for LinearisedOptimal {
         match model.measurement {
             Measurement::Bearing => {
                 let rho = model.rho(t);
+                let (sy, cy) = y.sin_cos();
                 Self::draw(model, parents, z, x, log_q, |xb| {
-                    let (h, gx, gy) = bearing_and_gradient(xb[0] - rho[0], xb[1] - rho[1]);
-                    (gx, gy, wrap(y - h))
+                    let (dx, dy) = (xb[0] - rho[0], xb[1] - rho[1]);
+                    let inv_r2 = 1.0 / (dx * dx + dy * dy);
+                    (-dy * inv_r2, dx * inv_r2, residual(sy, cy, dx, dy))
                 });
             }
             Measurement::Linear(c) => Self::draw(model, parents, z, x, log_q, |xb| {
