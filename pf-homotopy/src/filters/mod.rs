@@ -3,8 +3,6 @@
 
 pub mod ohf_tracker;
 pub mod pf;
-#[doc(hidden)]
-pub mod pf_old;
 pub mod ukf_lpc;
 
 use serde::{Deserialize, Serialize};
