@@ -292,6 +292,15 @@ fn bench_filter_keeps_its_json_contract_for_every_model() {
     }
     let o = pf_viz(&["bench", "filter", "--model", "bogus"]);
     assert!(!o.status.success() && o.stdout.is_empty());
-    let o = pf_viz(&["bench", "filter", "--model", "radar", "--particles", "0", "--json"]);
-    one_line_error(&o);
+    let o = pf_viz(&[
+        "bench",
+        "filter",
+        "--model",
+        "radar",
+        "--particles",
+        "0",
+        "--json",
+    ]);
+    one_line_error(&o, "bench filter N = 0", &["--particles"]);
+    assert!(o.stdout.is_empty());
 }
