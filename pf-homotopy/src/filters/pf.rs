@@ -15,8 +15,9 @@
 //!
 //! Every per-particle function is plain arithmetic over the chunk's columns, the bearing's
 //! `atan2` and the determinant's `ln` from [`pf_core::simd::special`], so that LLVM
-//! vectorises the chunk loops (the generic filter this replaces moved one particle at a
-//! time, at about 128 ns per particle-step).
+//! vectorises the chunk loops: a 40-step run at N = 10⁵ takes about 23 ns of CPU per
+//! particle-step on the AMD EPYC of the crate README's timings, 4.5× less than the same PF
+//! on pf-core's generic filter, one particle at a time.
 //!
 //! ## References
 //! - A. Doucet, S. Godsill, C. Andrieu, "On sequential Monte Carlo sampling methods for
