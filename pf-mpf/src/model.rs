@@ -44,7 +44,7 @@ pub trait Measurement<const P: usize, const NY: usize>: Send + Sync {
     /// particle at a time through [`h`](Self::h) and [`residual`](Self::residual); override
     /// it with loops over the columns (as [`RangeAzimuth`](crate::radar::RangeAzimuth) and
     /// [`LinearMeasurement`] do) for a filter whose loops vectorise.
-    #[inline]
+    #[inline(always)]
     fn residuals(
         &self,
         t: usize,
@@ -75,7 +75,7 @@ impl<const P: usize, const NY: usize> Measurement<P, NY> for LinearMeasurement<P
         self.h * xp
     }
 
-    #[inline]
+    #[inline(always)]
     fn residuals(
         &self,
         _t: usize,

@@ -112,7 +112,7 @@ impl MpfConfig {
 /// `out[i] = offset + Σ_j c_j · x_j[i]` over the terms whose coefficient is not zero, in
 /// passes of up to four terms (a model's constant matrices are sparse: the radar's `A` has
 /// 10 non-zero entries of 36).
-#[inline]
+#[inline(always)]
 pub(crate) fn lincomb<'a>(
     out: &mut [f64],
     offset: f64,
@@ -137,7 +137,7 @@ pub(crate) fn lincomb<'a>(
 }
 
 /// One pass of [`lincomb`]: `out = offset + Σ` on the first, `out += Σ` after.
-#[inline]
+#[inline(always)]
 fn lincomb_pass(out: &mut [f64], offset: f64, t: &[(f64, &[f64])], first: bool) {
     let n = out.len();
     match *t {
@@ -372,7 +372,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Bat
 
     /// Alg. 1, step 1: `x^{p,(i)}_0 ~ p(x^p_0)` (mean plus lower factor times `z`),
     /// `x̂^{k,(i)} = x̄^k_0`.
-    #[inline]
+    #[inline(always)]
     fn initial(&self, z: Cols<'_>, mut x: ColsMut<'_>) {
         for r in 0..P {
             let terms = (0..P).map(|c| (self.chol0[r][c], z.col(c)));
@@ -385,7 +385,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Bat
 
     /// Eqs. (8)–(10) from the resampled parents: `x^p_{t+1} = A^p x^p + A^k x̂^k + w` and
     /// `x̂^k_{t+1|t} = F^k x̂^k + F^p x^p + L_t w` with `w = T1 z` (`T9` of Table I is `w`).
-    #[inline]
+    #[inline(always)]
     fn propagate(&self, t: usize, _u: &(), parents: Cols<'_>, z: Cols<'_>, mut x: ColsMut<'_>) {
         let s = self.step_at(t);
         for r in 0..P {
@@ -405,7 +405,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Bat
     }
 
     /// Alg. 1, step 2: `log q_t = log N(y_t; h_t(x^p_t), R)`.
-    #[inline]
+    #[inline(always)]
     fn add_log_likelihood(&self, t: usize, y: &Self::Obs, x: Cols<'_>, lw: &mut [f64]) {
         let n = x.len();
         let mut e = [[0.0; TILE]; NY];
@@ -893,7 +893,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Bat
     }
 
     /// `x^{p,(i)}_0 ~ p(x^p_0)`, `{x̂^k, P} = {x̄^k_0, P̄_0}`.
-    #[inline]
+    #[inline(always)]
     fn initial(&self, z: Cols<'_>, mut x: ColsMut<'_>) {
         for r in 0..P {
             let terms = (0..P).map(|c| (self.chol0[r][c], z.col(c)));
@@ -908,7 +908,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Bat
     }
 
     /// The measurement update with `y_{t−1}` (when given), then the time update.
-    #[inline]
+    #[inline(always)]
     fn propagate(
         &self,
         t: usize,
@@ -935,7 +935,7 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>> Bat
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn add_log_likelihood(&self, t: usize, y: &Self::Obs, x: Cols<'_>, lw: &mut [f64]) {
         let n = x.len();
         let mut off = 0;
