@@ -1,7 +1,10 @@
-//! Time of a radar MPF run per partition (Table II's partitions), N = 2000, 20 steps.
+//! Time of a radar MPF run per partition (Table II's partitions), N = 2000, 20 steps; and
+//! the standard PF on the radar model (13) at N = 10³ … 10⁶, one thread (`radar_pf`, the
+//! filter of `pf-viz bench filter --model radar`), in elements = particle-steps.
 #![allow(missing_docs)] // criterion's macros generate undocumented items
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use pf_mpf::experiments::bench::RadarBench;
 use pf_mpf::mpf::MpfConfig;
 use pf_mpf::radar::{Partition, RadarConfig, run_partition};
 
@@ -25,5 +28,23 @@ fn partitions(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, partitions);
+fn radar_pf(c: &mut Criterion) {
+    let steps = 20;
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let mut g = c.benchmark_group("radar_pf");
+    g.sample_size(10);
+    for n in [1_000usize, 10_000, 100_000, 1_000_000] {
+        let mut bench = RadarBench::new(n, steps, 0).unwrap();
+        g.throughput(Throughput::Elements((n * steps) as u64));
+        g.bench_function(format!("N={n}"), |b| {
+            b.iter(|| one.install(|| bench.run().unwrap()))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, partitions, radar_pf);
 criterion_main!(benches);

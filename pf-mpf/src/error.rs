@@ -49,6 +49,16 @@ pub enum MpfError {
         /// Particle index.
         particle: usize,
     },
+    /// A step beyond the tabulated shared Riccati recursion, which had not converged.
+    #[error(
+        "step {t} is beyond the {horizon} steps of the shared Riccati recursion, which has not converged"
+    )]
+    RiccatiHorizon {
+        /// The step asked for.
+        t: usize,
+        /// Steps tabulated.
+        horizon: usize,
+    },
     /// An observation holds a NaN or infinite value.
     #[error("non-finite observation y_{t}[{index}] = {value}")]
     NonFiniteObservation {

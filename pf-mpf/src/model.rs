@@ -10,25 +10,56 @@
 //! The noises are independent (the paper reduces the dependent case to this one by
 //! Gram–Schmidt). The matrices are time-invariant here; the paper allows `A_t`, `C_t`, … to
 //! vary, which the radar example does not need. Dimensions are const generics: `P` = p,
-//! `K` = k and `NY` = the measurement dimension, so every per-particle product is a
-//! fixed-size nalgebra operation.
+//! `K` = k and `NY` = the measurement dimension. The model is built and checked with
+//! nalgebra matrices; the filter ([`crate::mpf`]) copies them into plain arrays and works on
+//! particles held as columns.
 
 use crate::error::{MpfError, Result};
 use nalgebra::{Cholesky, SMatrix, SVector};
+use pf_core::CoreError;
 use pf_core::gaussian::LN_2PI;
 use pf_core::params::ParamError;
-use pf_core::{CoreError, StateSpaceModel};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
+/// Particles per tile: the filter's per-particle algebra runs on `TILE` particles at a time,
+/// each quantity an array of `TILE` lanes on the stack, so that its loops vectorise.
+pub const TILE: usize = 32;
+
+/// One quantity of every particle of a tile.
+pub type Lanes = [f64; TILE];
+
 /// The nonlinear measurement `h_t(x^p)` of eq. (5c), and how to form its residual.
-pub trait Measurement<const P: usize, const NY: usize>: Sync {
+pub trait Measurement<const P: usize, const NY: usize>: Send + Sync {
     /// `h_t(x^p_t)`.
     fn h(&self, t: usize, xp: &SVector<f64, P>) -> SVector<f64, NY>;
 
     /// The residual `y − ŷ`. Override to wrap angles (the radar's azimuth).
     fn residual(&self, y: &SVector<f64, NY>, y_hat: &SVector<f64, NY>) -> SVector<f64, NY> {
         y - y_hat
+    }
+
+    /// `e[j][i] = residual(y, h_t(x^{p,(i)}))_j` for the first `m ≤ TILE` particles of a
+    /// tile, `xp[c]` holding component `c` of each (at least `m` values). By default one
+    /// particle at a time through [`h`](Self::h) and [`residual`](Self::residual); override
+    /// it with loops over the columns (as [`RangeAzimuth`](crate::radar::RangeAzimuth) and
+    /// [`LinearMeasurement`] do) for a filter whose loops vectorise.
+    #[inline(always)]
+    fn residuals(
+        &self,
+        t: usize,
+        y: &SVector<f64, NY>,
+        xp: &[&[f64]; P],
+        m: usize,
+        e: &mut [Lanes; NY],
+    ) {
+        for i in 0..m.min(TILE) {
+            let x = SVector::<f64, P>::from_fn(|c, _| xp[c][i]);
+            let r = self.residual(y, &self.h(t, &x));
+            for (j, e) in e.iter_mut().enumerate() {
+                e[i] = r[j];
+            }
+        }
     }
 }
 
@@ -42,6 +73,28 @@ pub struct LinearMeasurement<const P: usize, const NY: usize> {
 impl<const P: usize, const NY: usize> Measurement<P, NY> for LinearMeasurement<P, NY> {
     fn h(&self, _t: usize, xp: &SVector<f64, P>) -> SVector<f64, NY> {
         self.h * xp
+    }
+
+    #[inline(always)]
+    fn residuals(
+        &self,
+        _t: usize,
+        y: &SVector<f64, NY>,
+        xp: &[&[f64]; P],
+        m: usize,
+        e: &mut [Lanes; NY],
+    ) {
+        let m = m.min(TILE);
+        for (j, e) in e.iter_mut().enumerate() {
+            let e = &mut e[..m];
+            e.fill(y[j]);
+            for (c, x) in xp.iter().enumerate() {
+                let h = self.h[(j, c)];
+                for (e, &x) in e.iter_mut().zip(&x[..m]) {
+                    *e -= h * x;
+                }
+            }
+        }
     }
 }
 
@@ -155,10 +208,6 @@ pub struct MixedLinearGaussian<const P: usize, const K: usize, const NY: usize, 
     p0_k: SMatrix<f64, K, K>,
     /// `h_t`.
     h: H,
-    /// `½ log det(2πR)`, for the `C_t = 0` likelihood.
-    half_log_det_2pi_r: f64,
-    /// Lower factor of `Q^p`, for the standard PF (k = 0) view.
-    chol_q_p: SMatrix<f64, P, P>,
 }
 
 /// The matrices of model (5), as given by the user (see [`MixedLinearGaussian::new`]).
@@ -242,6 +291,11 @@ impl<const P: usize, const K: usize, const NY: usize, H> MixedLinearGaussian<P, 
         &self.p0_k
     }
 
+    /// The law of `e_t`, `N(0, R)`, factored, eq. (5c).
+    pub fn e(&self) -> &FactoredGaussian<NY> {
+        &self.e
+    }
+
     /// The measurement function `h_t`, eq. (5c).
     pub fn h(&self) -> &H {
         &self.h
@@ -267,14 +321,13 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>>
         ] {
             check_finite(what, v)?;
         }
-        let chol_q_p = FactoredGaussian::new("Q^p", SVector::zeros(), m.q_p)?.chol;
+        FactoredGaussian::new("Q^p", SVector::<f64, P>::zeros(), m.q_p)?;
         if K > 0 {
             FactoredGaussian::new("Q^k", SVector::<f64, K>::zeros(), m.q_k)?;
             FactoredGaussian::new("P̄_0", m.x0_k, m.p0_k)?;
         }
         let e = FactoredGaussian::new("R", SVector::zeros(), m.r)?;
         let x0_p = FactoredGaussian::new("P^p_0", m.x0_p, m.p0_p)?;
-        let half_log_det_2pi_r = half_log_det_2pi(&e.chol);
         Ok(Self {
             a_p: m.a_p,
             a_k: m.a_k,
@@ -288,8 +341,6 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>>
             x0_k: m.x0_k,
             p0_k: m.p0_k,
             h,
-            half_log_det_2pi_r,
-            chol_q_p,
         })
     }
 
@@ -302,61 +353,12 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>>
     pub fn r(&self) -> &SMatrix<f64, NY, NY> {
         &self.e.cov
     }
-
-    /// `log N(y; h(x^p), R)`: the importance weight `q_t` of Alg. 1, step 2 (`C_t = 0`).
-    #[inline]
-    pub fn log_likelihood_p(&self, t: usize, xp: &SVector<f64, P>, y: &SVector<f64, NY>) -> f64 {
-        let e = self.h.residual(y, &self.h.h(t, xp));
-        log_normal_chol(&self.e.chol, e, self.half_log_det_2pi_r)
-    }
 }
 
 /// `½ log det(2π L Lᵀ)`.
 pub(crate) fn half_log_det_2pi<const D: usize>(l: &SMatrix<f64, D, D>) -> f64 {
     let log_diag: f64 = (0..D).map(|i| l[(i, i)].ln()).sum();
     log_diag + 0.5 * D as f64 * LN_2PI
-}
-
-/// `log N(e; 0, L Lᵀ)` given `½ log det(2π L Lᵀ)`.
-#[inline]
-pub(crate) fn log_normal_chol<const D: usize>(
-    l: &SMatrix<f64, D, D>,
-    e: SVector<f64, D>,
-    half_log_det: f64,
-) -> f64 {
-    let z = l
-        .solve_lower_triangular(&e)
-        .unwrap_or_else(|| SVector::repeat(f64::NAN));
-    -0.5 * z.norm_squared() - half_log_det
-}
-
-/// With `k = 0` the model is an ordinary state-space model on `x = x^p`: the standard PF of
-/// pf-core runs on it, and the MPF with `k = 0` must behave exactly like that filter.
-impl<const P: usize, const NY: usize, H: Measurement<P, NY>> StateSpaceModel
-    for MixedLinearGaussian<P, 0, NY, H>
-{
-    type State = SVector<f64, P>;
-    type Obs = SVector<f64, NY>;
-    type Input = ();
-
-    fn sample_initial<R: Rng + ?Sized>(&self, rng: &mut R) -> Self::State {
-        self.x0_p.sample(rng)
-    }
-
-    fn sample_transition<R: Rng + ?Sized>(
-        &self,
-        _t: usize,
-        x_prev: &Self::State,
-        _u: Option<&()>,
-        rng: &mut R,
-    ) -> Self::State {
-        let z = SVector::<f64, P>::from_fn(|_, _| StandardNormal.sample(rng));
-        self.a_p * x_prev + self.chol_q_p * z
-    }
-
-    fn log_likelihood(&self, t: usize, x: &Self::State, y: &Self::Obs) -> f64 {
-        self.log_likelihood_p(t, x, y)
-    }
 }
 
 /// Check an observation sequence: finite values. Returns the number of observed steps.
@@ -412,7 +414,8 @@ mod tests {
         assert_eq!(model.x0_p().cov(), &p0_p);
         let l = model.x0_p().chol();
         assert!((l * l.transpose() - p0_p).amax() < 1e-12);
-        assert!((model.chol_q_p * model.chol_q_p.transpose() - q_p).amax() < 1e-12);
+        let l = model.e().chol();
+        assert!((l * l.transpose() - r).amax() < 1e-12);
         // A covariance that is not positive definite is refused, naming it.
         let bad = Model5Matrices {
             q_p: SMatrix::<f64, 2, 2>::new(1.0, 2.0, 2.0, 1.0),

@@ -2,14 +2,18 @@
 //! azimuth, and the partitions of its linear states between PF and KF.
 
 use crate::error::{MpfError, Result};
-use crate::model::{FactoredGaussian, Measurement, MixedLinearGaussian, Model5Matrices};
+use crate::model::{
+    FactoredGaussian, Lanes, Measurement, MixedLinearGaussian, Model5Matrices, TILE,
+};
 use crate::mpf::{Mpf, MpfConfig};
 use nalgebra::{SMatrix, SVector};
 use pf_core::geometry::wrap_angle;
+use pf_core::mc::Par;
 use pf_core::params::ParamError;
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
+use std::f64::consts::TAU;
 
 /// Full state `[p_x p_y v_x v_y a_x a_y]`.
 pub type RadarState = SVector<f64, 6>;
@@ -30,6 +34,30 @@ impl<const P: usize> Measurement<P, 2> for RangeAzimuth {
     #[inline]
     fn residual(&self, y: &RadarObs, y_hat: &RadarObs) -> RadarObs {
         RadarObs::new(y[0] - y_hat[0], wrap_angle(y[1] - y_hat[1]))
+    }
+
+    /// Column by column: `y_r − √(p_x² + p_y²)` (no overflow below 10¹⁵⁴) and
+    /// `y_a − atan2(p_y, p_x)`, the azimuth residual wrapped into `[−π, π]` by subtracting the
+    /// nearest multiple of `2π` (the same value as [`wrap_angle`] for residuals already in
+    /// range, which it returns unchanged). The range and the wrap vectorise; std's `atan2` is
+    /// a call into the C library, one particle at a time.
+    #[inline(always)]
+    fn residuals(&self, _t: usize, y: &RadarObs, xp: &[&[f64]; P], m: usize, e: &mut [Lanes; 2]) {
+        let m = m.min(TILE);
+        let (px, py) = (&xp[0][..m], &xp[1][..m]);
+        let [e_r, e_a] = e;
+        for ((e, &x), &y_) in e_r[..m].iter_mut().zip(px).zip(py) {
+            *e = y[0] - (x * x + y_ * y_).sqrt();
+        }
+        for ((e, &x), &y_) in e_a[..m].iter_mut().zip(px).zip(py) {
+            *e = y[1] - y_.atan2(x);
+        }
+        // round(d/2π) by the 1.5·2⁵² trick: exact for |d/2π| < 2⁵¹, no libm call.
+        const ROUND: f64 = 6_755_399_441_055_744.0;
+        for e in &mut e_a[..m] {
+            let k = (*e * (1.0 / TAU) + ROUND) - ROUND;
+            *e -= TAU * k;
+        }
     }
 }
 
@@ -341,16 +369,20 @@ fn run_pk<const P: usize, const K: usize, R: Rng + ?Sized>(
     mut trace: Option<&mut RunTrace>,
 ) -> Result<RunErrors> {
     let model = part.model::<P, K>(cfg)?;
-    let mut filter = Mpf::new(model, mpf_cfg)?;
+    // The chunk streams of the engine come from one draw of the caller's stream. Runs are
+    // sequential: their callers replicate them in parallel, or time them.
+    let mut filter = Mpf::new(model, mpf_cfg, rng.next_u64(), Par::Seq)?;
     let (pi, ki) = (part.p_indices(), part.k_indices());
     let n = truth.len();
     let mut est = vec![[0.0; 6]; n];
+    let n_part = filter.n_particles();
+    let mut col = vec![0.0; if trace.is_some() { n_part } else { 0 }];
     let start = std::time::Instant::now();
     if let Some(tr) = trace.as_deref_mut() {
         tr.kf_states = ki.iter().map(|&i| STATE_NAMES[i].to_string()).collect();
     }
     for (t, y) in ys.iter().enumerate() {
-        filter.step(y.as_ref(), rng)?;
+        filter.step(y.as_ref())?;
         let (mp, mk) = filter.estimate()?;
         for (r, &i) in pi.iter().enumerate() {
             est[t][i] = mp[r];
@@ -359,21 +391,23 @@ fn run_pk<const P: usize, const K: usize, R: Rng + ?Sized>(
             est[t][i] = mk[r];
         }
         if let Some(tr) = trace.as_deref_mut() {
-            let n = filter.n_particles();
-            tr.positions.push(
-                (0..n)
-                    .map(|j| {
-                        let x = filter.particle_p(j);
-                        [x[0], x[1]]
-                    })
-                    .collect(),
-            );
-            tr.kf_means.push(
-                (0..n)
-                    .map(|j| filter.kf_mean(j).iter().copied().collect())
-                    .collect(),
-            );
-            tr.weights.push(filter.weights().to_vec());
+            filter.column_into(0, &mut col)?;
+            let mut pos: Vec<[f64; 2]> = col.iter().map(|&x| [x, 0.0]).collect();
+            filter.column_into(1, &mut col)?;
+            for (p, &y) in pos.iter_mut().zip(&col) {
+                p[1] = y;
+            }
+            tr.positions.push(pos);
+            let mut means = vec![Vec::with_capacity(K); n_part];
+            for r in 0..K {
+                filter.column_into(P + r, &mut col)?;
+                for (m, &x) in means.iter_mut().zip(&col) {
+                    m.push(x);
+                }
+            }
+            tr.kf_means.push(means);
+            filter.weights_into(&mut col)?;
+            tr.weights.push(col.clone());
             tr.estimates.push(est[t]);
         }
     }

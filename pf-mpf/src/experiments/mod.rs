@@ -8,10 +8,12 @@
 //! | [`table3`] | Table III: constant velocity RMSE |
 //! | [`calibrate`](crate::calibrate::calibrate) | Section IV-A: `flop_ns`, `c1`, `c2`, `c3` |
 //! | [`traces()`] | one recorded run per partition, step by step (for recordings) |
+//! | [`bench::RadarBench`] | the standard PF on eq. (13), timed by `pf-viz bench filter` |
 //!
 //! Each takes `&XConfig` (with `XConfig::at_scale` giving the preset of a
 //! [`Scale`]) and returns `Result<XResult>`; Tables II and III share [`TableConfig`].
 
+pub mod bench;
 mod fig3;
 mod ratio;
 mod tables;
