@@ -52,6 +52,7 @@
 //!   using the EM algorithm", *J. Time Series Analysis* 3(4), 1982.
 
 pub mod ar1;
+pub mod batch;
 pub mod em;
 pub mod error;
 pub mod exact;
@@ -62,6 +63,7 @@ pub mod functional;
 pub mod path_space;
 
 pub use ar1::{Ar1Data, Ar1Statistics, SuffStats, Theta, ThetaSamples};
+pub use batch::{FixedLagTerms, SmoothedAr1};
 pub use error::{Result, SmoothError};
 pub use fixed_lag::FixedLag;
 pub use forward::ForwardSmoothing;
