@@ -24,9 +24,11 @@
 //! the identity and the register is each particle's own past. Several lags share one
 //! register of `Δ = max δ` columns.
 //!
-//! Indexing is that of [`fixed_lag`](crate::fixed_lag): the term of step `j ≥ 1` is
-//! `s_{j−1}(X_{j−1}, X_j)`, plus, for `j = 1`, the term of `X_0` alone; a lag `δ > n`
-//! freezes nothing and gives the path-space estimate.
+//! Indexing: the term of step `j ≥ 1` is `s_{j−1}(X_{j−1}, X_j)`, plus, for `j = 1`, the
+//! term of `X_0` alone (see [`functional`](crate::functional)); it is frozen at step
+//! `j + δ − 1` (the paper's `k + δ` with `k = j − 1`). So with resampling turned off both
+//! estimators are exactly the importance-sampling formulas (tested). A lag `δ > n` freezes
+//! nothing and gives the path-space estimate.
 
 use crate::ar1::{Ar1Data, SuffStats, Theta};
 use crate::error::{Result, SmoothError};
@@ -349,7 +351,7 @@ impl<'a> FixedLagTerms<'a> {
             *out = self.w.iter().zip(&self.a).map(|(w, g)| w * g).sum();
         }
         let finite = |v: [f64; 4], what: &'static str| -> Result<SuffStats> {
-            crate::path_space::check_finite(what, t, &v)?;
+            crate::estimate::check_finite(what, t, &v)?;
             Ok(SuffStats { n: t, tau: v })
         };
         let mut lagged = Vec::with_capacity(self.lags.len());

@@ -23,8 +23,8 @@
 //!   Bayesian filtering", *Statistics and Computing* 10, 2000 (FFBSm).
 
 use crate::error::Result;
+use crate::estimate::{copy_states, weighted_estimate};
 use crate::functional::AdditiveFunctional;
-use crate::path_space::{copy_states, weighted_estimate};
 use pf_core::TransitionDensity;
 use pf_core::filter::{BatchObserver, BatchView};
 use pf_core::mc::Par;
