@@ -187,40 +187,40 @@ fn backward_row<M, F>(
         row.fill(f64::NAN);
         return;
     }
-    // Every increment first, then one pass: reading each one back right after its scalar
-    // stores stalled on store forwarding (a third of the time, perf).
-    scratch.s.fill(0.0);
-    for ((&b, xj), sj) in scratch
-        .beta
-        .iter()
-        .zip(prev)
-        .zip(scratch.s.chunks_exact_mut(d))
-    {
-        if b != 0.0 {
-            f.increment(k, xj, x, sj);
-        }
-    }
-    // Four components at a time in a local accumulator: summed in the row itself, each
-    // `j` waited on the row's previous store.
+    // Σ_j β^{ij} T_{k−1}^j, four components at a time in a local accumulator (summed in
+    // the row itself, each `j` waited on the row's previous store).
+    // A zero weight is skipped, not multiplied: `T_{k−1}^j` may be NaN (no backward weight
+    // at an earlier step), and `0 · NaN` would spread it to every row.
     for (c0, out) in (0..d).step_by(4).zip(row.chunks_mut(4)) {
         let w = out.len();
         let mut acc = [0.0f64; 4];
-        for ((&b, tj), sj) in scratch
-            .beta
-            .iter()
-            .zip(t_prev.chunks_exact(d))
-            .zip(scratch.s.chunks_exact(d))
-        {
-            // A zero weight is skipped, not multiplied: `T_{k−1}^j` may be NaN (no backward
-            // weight at an earlier step), and `0 · NaN` would spread it to every row.
-            if b != 0.0 {
-                for (l, a) in acc[..w].iter_mut().enumerate() {
-                    *a += b * (tj[c0 + l] + sj[c0 + l]);
+        if w == 4 {
+            // The common case in registers (a slice of run-time length kept `acc` on the
+            // stack, a third of the row's time).
+            let [mut a0, mut a1, mut a2, mut a3] = acc;
+            for (&b, tj) in scratch.beta.iter().zip(t_prev.chunks_exact(d)) {
+                if b != 0.0 {
+                    let t4 = &tj[c0..c0 + 4];
+                    a0 += b * t4[0];
+                    a1 += b * t4[1];
+                    a2 += b * t4[2];
+                    a3 += b * t4[3];
+                }
+            }
+            acc = [a0, a1, a2, a3];
+        } else {
+            for (&b, tj) in scratch.beta.iter().zip(t_prev.chunks_exact(d)) {
+                if b != 0.0 {
+                    for (l, a) in acc[..w].iter_mut().enumerate() {
+                        *a += b * tj[c0 + l];
+                    }
                 }
             }
         }
         out.copy_from_slice(&acc[..w]);
     }
+    // + Σ_j β^{ij} s_{k−1}(ξ_{k−1}^j, x), in the functional's closed form where it has one.
+    f.add_weighted_increments(k, prev, &scratch.beta, x, &mut scratch.s, row);
 }
 
 impl<M, F> ForwardSmoothing<M, F>
