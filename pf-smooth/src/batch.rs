@@ -421,3 +421,80 @@ impl BatchObserver for FixedLagTerms<'_> {
         self.error.take().map_or(Ok(()), Err)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One chunk of three particles moved by hand: the sums gain eq. (7)'s term, the
+    /// register shifts the parent's line by one, and the likelihood is the model's.
+    #[test]
+    fn a_chunk_moves_its_sums_and_register_with_its_parents() {
+        let data = Ar1Data::new(vec![0.5, 1.0, -2.0]).unwrap();
+        let theta = Theta::paper_start();
+        let m = SmoothedAr1::new(&theta, &data, 2).unwrap();
+        assert_eq!(m.dim(), 7);
+        // Parents: state, γ, then ξ_{t−1}, ξ_{t−2}.
+        let parents = [
+            [1.0, -1.0, 2.0],
+            [10.0, 20.0, 30.0],
+            [1.0, 2.0, 3.0],
+            [0.5, 0.5, 0.5],
+            [4.0, 5.0, 6.0],
+            [0.3, 0.4, 0.5],
+            [0.6, 0.7, 0.8],
+        ]
+        .concat();
+        let z = [0.0, 1.0, -2.0];
+        let mut x = vec![0.0; 21];
+        let mut lw = vec![0.0; 3];
+        m.propagate_weighed(
+            2,
+            &(),
+            Some(&-2.0),
+            Cols::new(&parents, 7, 3),
+            Cols::new(&z, 1, 3),
+            ColsMut::new(&mut x, 7, 3),
+            &mut lw,
+        );
+        let col = |k: usize| &x[k * 3..(k + 1) * 3];
+        for i in 0..3 {
+            let (xp, zi) = (parents[i], z[i]);
+            let xn = 0.8 * xp + 0.5 * zi;
+            assert!((col(0)[i] - xn).abs() < 1e-15);
+            let s = term(-2.0, xp, xn);
+            for c in 0..4 {
+                assert_eq!(col(1 + c)[i], parents[(1 + c) * 3 + i] + s[c]);
+            }
+            assert_eq!(col(5)[i], xp, "ξ_{{t−1}} is the parent's state");
+            assert_eq!(
+                col(6)[i],
+                parents[5 * 3 + i],
+                "ξ_{{t−2}} is the parent's ξ_{{t−1}}"
+            );
+            let e = (-2.0 - xn) / 2.0;
+            let want = -(2.0f64.ln()) - 0.5 * (2.0 * std::f64::consts::PI).ln() - 0.5 * e * e;
+            assert!((lw[i] - want).abs() < 1e-12, "{} vs {want}", lw[i]);
+        }
+        // Without an observation: the same states, no weight.
+        let mut y = vec![0.0; 21];
+        m.propagate(
+            2,
+            &(),
+            Cols::new(&parents, 7, 3),
+            Cols::new(&z, 1, 3),
+            ColsMut::new(&mut y, 7, 3),
+        );
+        assert_eq!(x, y);
+        // X_0 ~ N(Y_0, ρ²), γ_0 = (0, 0, 0, (Y_0 − X_0)²), an empty register.
+        let mut x0 = vec![1.0; 21];
+        m.initial(Cols::new(&z, 1, 3), ColsMut::new(&mut x0, 7, 3));
+        for i in 0..3 {
+            let v = 0.5 + 2.0 * z[i];
+            assert_eq!(x0[i], v);
+            assert_eq!([x0[3 + i], x0[6 + i], x0[9 + i]], [0.0; 3]);
+            assert_eq!(x0[12 + i], (0.5 - v) * (0.5 - v));
+            assert_eq!([x0[15 + i], x0[18 + i]], [0.0; 2]);
+        }
+    }
+}
