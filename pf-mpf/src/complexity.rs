@@ -129,6 +129,91 @@ pub fn eq14_factor(c: &EfCoefficients) -> f64 {
     1.0 - (4.0 * c.c3 + 56.0) / (c.c1 + c.c2 + 6.0 * c.c3 + 150.0)
 }
 
+/// The per-particle EF of eq. (11) (`C_t = 0`) split into its four sources, to show which
+/// term makes the MPF cheaper than the standard PF, or fails to.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PerParticleTerms {
+    /// Matrix arithmetic, `6kp + 4p² + 2k² + p − k` (Table I).
+    pub flops: f64,
+    /// Random numbers, `p·c3`.
+    pub random_numbers: f64,
+    /// Likelihood, `c1`.
+    pub likelihood: f64,
+    /// Resampling, `c2`.
+    pub resampling: f64,
+    /// The extension's `c_m·(p + k)` ([`ef_ct_zero_extended`]); 0 in the paper's form.
+    #[serde(default)]
+    pub state_traffic: f64,
+}
+
+impl PerParticleTerms {
+    /// Their sum: eq. (11)'s coefficient of `N` (plus the extension's term).
+    pub fn total(&self) -> f64 {
+        self.flops + self.random_numbers + self.likelihood + self.resampling + self.state_traffic
+    }
+}
+
+/// Eq. (11)'s coefficient of `N`, term by term, with the extension's `c_m` (0: the paper's
+/// form).
+pub fn per_particle_terms(p: usize, k: usize, c: &EfCoefficients, c_m: f64) -> PerParticleTerms {
+    let (pf, kf) = (p as f64, k as f64);
+    PerParticleTerms {
+        flops: 6.0 * kf * pf + 4.0 * pf * pf + 2.0 * kf * kf + pf - kf,
+        random_numbers: pf * c.c3,
+        likelihood: c.c1,
+        resampling: c.c2,
+        state_traffic: c_m * (pf + kf),
+    }
+}
+
+/// An extension of eq. (11) beyond the paper: `C(p,k,N) + c_m·(p + k)·N`.
+///
+/// Table I counts the arithmetic of Alg. 1, and `c1, c2, c3` its likelihood, resampling and
+/// random numbers. A filter also reads, writes and moves every particle's `p + k` state
+/// values several times a step (the resampled copies, the intermediate `T_i` blocks, the
+/// estimate), which costs time but no flop. `c_m` is that cost per state value per particle
+/// in EF; it is fitted on the standard PF's measured time (see
+/// [`fit_state_traffic`]), and the paper's form is `c_m = 0`.
+pub fn ef_ct_zero_extended(p: usize, k: usize, c: &EfCoefficients, c_m: f64) -> EfCost {
+    let z = ef_ct_zero(p, k, c);
+    EfCost {
+        constant: z.constant,
+        per_particle: z.per_particle + c_m * (p + k) as f64,
+    }
+}
+
+/// `N(k)` solving `C_ext(p+k, 0, N_PF) = C_ext(p, k, N(k))` with [`ef_ct_zero_extended`]
+/// (`c_m = 0` gives [`equal_cost_particles`] with [`CtCase::Zero`]).
+pub fn equal_cost_particles_extended(
+    p: usize,
+    k: usize,
+    n_pf: f64,
+    c: &EfCoefficients,
+    c_m: f64,
+) -> f64 {
+    let pf = ef_ct_zero_extended(p + k, 0, c, c_m).at(n_pf);
+    let mpf = ef_ct_zero_extended(p, k, c, c_m);
+    (pf - mpf.constant) / mpf.per_particle
+}
+
+/// The extension's `c_m` from one measured time of the standard PF (`m = p + k` states, `N`
+/// particles, `t_f` steps, `seconds` in all) and the flop time: the EF per state value per
+/// particle that eq. (11) leaves unexplained, `(seconds/(t_f·flop_ns·10⁻⁹) − C(m,0,N))/(m·N)`,
+/// floored at 0 (a model that already over-predicts gets no extension).
+pub fn fit_state_traffic(
+    m: usize,
+    n: usize,
+    t_f: usize,
+    seconds: f64,
+    flop_ns: f64,
+    c: &EfCoefficients,
+) -> f64 {
+    let measured_ef = seconds / (t_f as f64 * flop_ns * 1e-9);
+    let model = ef_ct_zero(m, 0, c).at(n as f64);
+    let c_m = (measured_ef - model) / (m as f64 * n as f64);
+    if c_m.is_finite() { c_m.max(0.0) } else { 0.0 }
+}
+
 /// One row of Table I: an instruction and its flop counts, with `N` factored out where the
 /// row scales with it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -211,4 +296,46 @@ pub fn table_one_total(p: usize, k: usize, n: usize, c: &EfCoefficients) -> f64 
         .iter()
         .map(|r| r.mult + r.add + r.other)
         .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_terms_sum_to_eq_11_and_the_extension_reduces_to_it() {
+        let c = EfCoefficients::default();
+        for k in 0..=4 {
+            let p = 6 - k;
+            let t = per_particle_terms(p, k, &c, 0.0);
+            assert!((t.total() - ef_ct_zero(p, k, &c).per_particle).abs() < 1e-9);
+            assert_eq!(ef_ct_zero_extended(p, k, &c, 0.0), ef_ct_zero(p, k, &c));
+            let a = equal_cost_particles_extended(p, k, 2000.0, &c, 0.0);
+            let b = equal_cost_particles(CtCase::Zero, p, k, 2000.0, &c);
+            assert!((a - b).abs() < 1e-9);
+            let e = per_particle_terms(p, k, &c, 7.0);
+            assert!((e.total() - ef_ct_zero_extended(p, k, &c, 7.0).per_particle).abs() < 1e-9);
+        }
+        // The extension's term is the same for every partition of six states, so it dilutes
+        // the MPF's advantage: the particle ratio falls towards 1 as c_m grows.
+        let r0 = equal_cost_particles_extended(2, 4, 2000.0, &c, 0.0);
+        let r1 = equal_cost_particles_extended(2, 4, 2000.0, &c, 500.0);
+        assert!(r0 > r1 && r1 > 2000.0);
+    }
+
+    #[test]
+    fn the_state_traffic_fit_recovers_its_coefficient() {
+        let c = EfCoefficients::default();
+        let (m, n, t_f, flop_ns) = (6, 2000, 50, 0.04);
+        let ef = ef_ct_zero_extended(m, 0, &c, 12.5).at(n as f64);
+        let seconds = ef * t_f as f64 * flop_ns * 1e-9;
+        let c_m = fit_state_traffic(m, n, t_f, seconds, flop_ns, &c);
+        assert!((c_m - 12.5).abs() < 1e-9, "{c_m}");
+        // A measured time below the model's: no extension, never negative.
+        assert_eq!(
+            fit_state_traffic(m, n, t_f, 0.5 * seconds, flop_ns, &c),
+            0.0
+        );
+        assert_eq!(fit_state_traffic(m, n, t_f, f64::NAN, flop_ns, &c), 0.0);
+    }
 }
