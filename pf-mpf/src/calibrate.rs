@@ -37,7 +37,7 @@ use std::time::Instant;
 /// Shortest timed block (ns of CPU time): a configuration is repeated within one timing until
 /// the block lasts this long, so the clock's resolution and the cost of reading it stay below
 /// about 1 % of what is measured.
-pub const MIN_BLOCK_NS: f64 = 50_000.0;
+pub const MIN_BLOCK_NS: f64 = 200_000.0;
 
 /// State values moved per resampled particle in the `c2` timing: the radar model's
 /// `m = p + k = 6`, the same for every partition.
@@ -148,7 +148,7 @@ pub struct CalibrateConfig {
 }
 
 fn default_rounds() -> usize {
-    9
+    15
 }
 
 fn default_bootstrap() -> usize {
