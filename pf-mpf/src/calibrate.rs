@@ -21,11 +21,7 @@
 
 use crate::complexity::EfCoefficients;
 use crate::error::{MpfError, Result};
-use crate::model::Measurement;
-use crate::radar::{RadarObs, RangeAzimuth};
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat};
-use nalgebra::SVector;
+use crate::radar::RadarObs;
 use pf_core::params::{self, ParamError};
 use pf_core::resample::{Resample, Resampler};
 use rand::RngExt;
@@ -756,7 +752,45 @@ fn interleaved(reps: usize, rounds: usize, jobs: &mut [Box<dyn FnMut() + '_>]) -
     out
 }
 
+/// `out_r = Σ_c a[r][c] · x_c` for the `d` columns `x` of `N` particles: a `d×d · d×N`
+/// product written as the batch filters write theirs, column by column over the particles,
+/// `d·N·(2d − 1)` flops (Table I's count).
+fn product_columns(a: &[f64], x: &[Vec<f64>], out: &mut [Vec<f64>]) {
+    let d = x.len();
+    for (r, o) in out.iter_mut().enumerate() {
+        let a0 = a[r * d];
+        for (o, &x0) in o.iter_mut().zip(&x[0]) {
+            *o = a0 * x0;
+        }
+        for (c, xc) in x.iter().enumerate().skip(1) {
+            let ac = a[r * d + c];
+            for (o, &xi) in o.iter_mut().zip(xc) {
+                *o += ac * xi;
+            }
+        }
+    }
+}
+
+/// Eq. (13b)'s Gaussian log-likelihood of `N` particles, column by column as the batch
+/// filters compute it: range `√(p_x² + p_y²)`, azimuth `atan2(p_y, p_x)`, the azimuth
+/// residual wrapped into `[−π, π]`, and `−½ eᵀR⁻¹e` with the radar's diagonal `R`.
+fn radar_log_lik(y: &RadarObs, r_inv: [f64; 2], px: &[f64], py: &[f64], lw: &mut [f64]) {
+    const ROUND: f64 = 6_755_399_441_055_744.0; // 1.5·2⁵²: x + ROUND − ROUND rounds x
+    let tau = std::f64::consts::TAU;
+    for ((l, &x), &yy) in lw.iter_mut().zip(px).zip(py) {
+        let er = y[0] - (x * x + yy * yy).sqrt();
+        let d = y[1] - yy.atan2(x);
+        let ea = d - tau * ((d * (1.0 / tau) + ROUND) - ROUND);
+        *l = -0.5 * (er * er * r_inv[0] + ea * ea * r_inv[1]);
+    }
+}
+
 /// Measure the raw [`Timings`] (Section IV-A, steps 1–2), every configuration interleaved.
+///
+/// Each part is timed on the kernel the filters run: products column by column over the
+/// particles, the radar likelihood over columns with the weights' normalisation, systematic
+/// resampling with the gather of [`RESAMPLED_STATE_DIM`] state columns, and the batch
+/// engine's standard normals ([`LaneRng::fill_normal`](pf_core::simd::LaneRng::fill_normal)).
 ///
 /// # Errors
 /// A bad configuration.
@@ -768,37 +802,44 @@ pub fn measure(cfg: &CalibrateConfig) -> Result<Timings> {
     let mut mats = Vec::new();
     for &d in &cfg.dims {
         for &n in &cfg.n_values {
-            let a = Mat::<f64>::from_fn(d, d, |i, j| 1.0 / (1 + i + j) as f64);
-            let b = Mat::<f64>::from_fn(d, n, |i, j| ((i * 7 + j) % 13) as f64);
-            mats.push((a, b, Mat::<f64>::zeros(d, n)));
+            let a: Vec<f64> = (0..d * d)
+                .map(|i| 1.0 / (1 + i / d + i % d) as f64)
+                .collect();
+            let x: Vec<Vec<f64>> = (0..d)
+                .map(|r| (0..n).map(|j| ((r * 7 + j) % 13) as f64).collect())
+                .collect();
+            mats.push((a, x, vec![vec![0.0; n]; d]));
             flops.push((d * n * (2 * d - 1)) as f64);
         }
     }
     // 2. likelihood (with its share of the normalisation), resampling and randn per particle.
-    let r_chol = nalgebra::Matrix2::new(10.0, 0.0, 0.0, 1e-3);
+    let r_inv = [1.0 / 100.0, 1.0 / 1e-6];
     let y = RadarObs::new(2500.0, 0.64);
     let m = RESAMPLED_STATE_DIM;
     struct PerN {
-        xs: Vec<SVector<f64, 2>>,
+        px: Vec<f64>,
+        py: Vec<f64>,
         lw: Vec<f64>,
         w: Vec<f64>,
         anc: Vec<usize>,
         wr: Vec<f64>,
-        states: Vec<f64>,
-        moved: Vec<f64>,
+        states: Vec<Vec<f64>>,
+        moved: Vec<Vec<f64>>,
         buf: Vec<f64>,
     }
     let mut per_n: Vec<PerN> = cfg
         .n_values
         .iter()
         .map(|&n| {
-            let xs = (0..n)
-                .map(|_| {
-                    let a: f64 = StandardNormal.sample(&mut rng);
-                    let b: f64 = StandardNormal.sample(&mut rng);
-                    SVector::<f64, 2>::new(2000.0 + 30.0 * a, 1500.0 + 30.0 * b)
-                })
-                .collect();
+            let mut draw = |centre: f64| -> Vec<f64> {
+                (0..n)
+                    .map(|_| {
+                        let z: f64 = StandardNormal.sample(&mut rng);
+                        centre + 30.0 * z
+                    })
+                    .collect()
+            };
+            let (px, py) = (draw(2000.0), draw(1500.0));
             // Uneven weights, as after a measurement update, so resampling moves particles.
             let mut wr: Vec<f64> = (0..n)
                 .map(|_| {
@@ -809,29 +850,26 @@ pub fn measure(cfg: &CalibrateConfig) -> Result<Timings> {
             let s: f64 = wr.iter().sum();
             wr.iter_mut().for_each(|w| *w /= s);
             PerN {
-                xs,
+                px,
+                py,
                 lw: vec![0.0; n],
                 w: vec![0.0; n],
                 anc: vec![0; n],
                 wr,
-                states: (0..n * m).map(|i| i as f64).collect(),
-                moved: vec![0.0; n * m],
+                states: (0..m)
+                    .map(|c| (0..n).map(|i| (i * m + c) as f64).collect())
+                    .collect(),
+                moved: vec![vec![0.0; n]; m],
                 buf: vec![0.0; n],
             }
         })
         .collect();
     let mut jobs: Vec<Box<dyn FnMut() + '_>> = Vec::new();
-    for (a, b, c) in &mut mats {
+    for (a, x, out) in &mut mats {
+        let (a, x) = (&*a, &*x);
         jobs.push(Box::new(move || {
-            matmul(
-                c.as_mut(),
-                Accum::Replace,
-                a.as_ref(),
-                b.as_ref(),
-                1.0,
-                faer::Par::Seq,
-            );
-            black_box(&*c);
+            product_columns(a, x, out);
+            black_box(&*out);
         }));
     }
     let n_prod = jobs.len();
@@ -842,7 +880,8 @@ pub fn measure(cfg: &CalibrateConfig) -> Result<Timings> {
     let mut rnd_jobs: Vec<Box<dyn FnMut() + '_>> = Vec::new();
     for p in &mut per_n {
         let PerN {
-            xs,
+            px,
+            py,
             lw,
             w,
             anc,
@@ -851,14 +890,9 @@ pub fn measure(cfg: &CalibrateConfig) -> Result<Timings> {
             moved,
             buf,
         } = p;
-        let xs = &*xs;
+        let (px, py) = (&*px, &*py);
         lik_jobs.push(Box::new(move || {
-            for (l, x) in lw.iter_mut().zip(xs) {
-                let h = Measurement::<2, 2>::h(&RangeAzimuth, 0, x);
-                let e = Measurement::<2, 2>::residual(&RangeAzimuth, &y, &h);
-                let z = r_chol.solve_lower_triangular(&e).unwrap_or_default();
-                *l = -0.5 * z.norm_squared();
-            }
+            radar_log_lik(&y, r_inv, px, py, lw);
             let _ = pf_core::weights::normalise(0, lw, w);
             black_box(&*w);
         }));
@@ -867,16 +901,16 @@ pub fn measure(cfg: &CalibrateConfig) -> Result<Timings> {
         let states = &*states;
         res_jobs.push(Box::new(move || {
             Resampler::Systematic.resample(wr, &mut rng_res, anc);
-            for (dst, &a) in moved.chunks_exact_mut(m).zip(anc.iter()) {
-                dst.copy_from_slice(&states[a * m..(a + 1) * m]);
+            for (dst, src) in moved.iter_mut().zip(states) {
+                for (d, &a) in dst.iter_mut().zip(anc.iter()) {
+                    *d = src[a];
+                }
             }
             black_box(&*moved);
         }));
-        let mut rng_rnd = streams.next().expect("endless");
+        let mut lanes = pf_core::simd::LaneRng::from_rng(&mut streams.next().expect("endless"));
         rnd_jobs.push(Box::new(move || {
-            for z in buf.iter_mut() {
-                *z = StandardNormal.sample(&mut rng_rnd);
-            }
+            lanes.fill_normal(buf);
             black_box(&*buf);
         }));
     }
