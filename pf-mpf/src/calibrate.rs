@@ -484,6 +484,32 @@ pub struct Timings {
 }
 
 impl Timings {
+    /// Add the rounds of `other`, timed on the same configurations (a later stretch of one
+    /// interleaved calibration).
+    ///
+    /// # Errors
+    /// Different configurations.
+    pub fn append(&mut self, other: &Timings) -> Result<()> {
+        if self.flops != other.flops || self.n != other.n {
+            return Err(MpfError::Param(ParamError {
+                name: "timings",
+                value: other.flops.len() as f64,
+                reason: "rounds of different configurations cannot be pooled",
+            }));
+        }
+        for (mine, theirs) in [
+            (&mut self.product_ns, &other.product_ns),
+            (&mut self.likelihood_ns, &other.likelihood_ns),
+            (&mut self.resample_ns, &other.resample_ns),
+            (&mut self.randn_ns, &other.randn_ns),
+        ] {
+            for (a, b) in mine.iter_mut().zip(theirs) {
+                a.extend_from_slice(b);
+            }
+        }
+        Ok(())
+    }
+
     /// The number of rounds (the shortest row's length).
     pub fn rounds(&self) -> usize {
         self.product_ns

@@ -17,7 +17,10 @@ mod ratio;
 mod tables;
 mod traces;
 
-pub use fig3::{Fig3Config, Fig3Result, Fig3Row, fig3, fig3_with, predicted_time_s};
+pub use fig3::{
+    Fig3Config, Fig3Result, Fig3Row, alg1_matrices, fig3, fig3_calibrated, fig3_with,
+    predicted_time_s,
+};
 pub use ratio::{RatioConfig, RatioCurve, RatioResult, ratio};
 pub use tables::{
     ModelPrediction, PartitionTerms, RmseCurve, TableConfig, TableReport, TableResult, TableRow,

@@ -8,14 +8,14 @@
 //!
 //! Table II also carries what the calibrated EF model predicts: for each partition the `N`
 //! at which eq. (11) costs what the standard PF costs with `N_PF` (`predicted_N`), the same
-//! with the extension [`ef_ct_zero_extended`](crate::complexity::ef_ct_zero_extended), and
-//! the per-particle terms behind both, ours beside the paper's.
+//! with the extended model [`ef_structural`], and the per-particle terms behind it, ours
+//! beside the paper's.
 
 use super::Scale;
 use crate::calibrate::{CalibrateConfig, Calibration, CalibrationReport, Stopwatch, median};
 use crate::complexity::{
-    EfCoefficients, PerParticleTerms, equal_cost_particles_extended, fit_state_traffic,
-    per_particle_terms,
+    CtCase, EfCoefficients, PerParticleTerms, ef_structural, equal_cost_particles,
+    equal_cost_particles_structural, fit_state_traffic, per_particle_terms, structural_terms,
 };
 use crate::error::{MpfError, Result};
 use crate::mpf::MpfConfig;
@@ -217,8 +217,8 @@ pub struct PartitionTerms {
     pub p: usize,
     /// KF states.
     pub k: usize,
-    /// Eq. (11)'s coefficient of `N` with this machine's `c1, c2, c3`, and the extension's
-    /// `c_m (p + k)`.
+    /// The extended model's coefficient of `N` with this machine's `c1, c2, c3`: Table I's
+    /// flops on the radar model's nonzeros, and `c_m (p + k)`.
     pub ours: PerParticleTerms,
     /// The same with the paper's `c1 = 445, c2 = 487, c3 = 125` (no extension).
     pub paper: PerParticleTerms,
@@ -234,7 +234,8 @@ pub struct ModelPrediction {
     pub predicted_n: Vec<f64>,
     /// Its central 68 % interval over the calibration's bootstrap.
     pub predicted_n_range: Vec<(f64, f64)>,
-    /// The same under the extension, `c_m` fitted on the standard PF's measured time.
+    /// The same under the extended model [`ef_structural`], `c_m` fitted on the standard
+    /// PF's measured time.
     pub predicted_n_ext: Vec<f64>,
     /// The extension's `c_m` (EF per state value per particle).
     pub c_m: f64,
@@ -331,27 +332,50 @@ fn time_of(cfg: &TableConfig, part: &Partition, n: usize, truth: &[RadarState]) 
 
 /// The model's side of Table II for `partitions`, given the standard PF's measured time
 /// `target_s` (which fits the extension's `c_m`) and the measured `N` per partition.
+///
+/// # Errors
+/// A bad configuration (the radar model of a partition).
 pub fn model_prediction(
     cfg: &TableConfig,
     report: &CalibrationReport,
     target_s: f64,
     measured_n: &[usize],
-) -> ModelPrediction {
+) -> Result<ModelPrediction> {
     let cal = report.calibration;
     let coef = cal.coefficients();
-    let m = 6;
-    let c_m = fit_state_traffic(m, cfg.n_pf, cfg.radar.n_steps, target_s, cal.flop_ns, &coef);
+    let structure = cfg
+        .partitions
+        .iter()
+        .map(|q| super::fig3::alg1_matrices(q, &cfg.radar))
+        .collect::<Result<Vec<_>>>()?;
+    let c_m = fit_state_traffic(
+        &ef_structural(&structure[0], &coef, 0.0),
+        6,
+        cfg.n_pf,
+        cfg.radar.n_steps,
+        target_s,
+        cal.flop_ns,
+    );
     let n_pf = cfg.n_pf as f64;
-    let eq = |p, k, c: &EfCoefficients, c_m| {
+    let eq = |p, k, c: &EfCoefficients| {
         if k == 0 {
             n_pf
         } else {
-            equal_cost_particles_extended(p, k, n_pf, c, c_m)
+            equal_cost_particles(CtCase::Zero, p, k, n_pf, c)
         }
     };
     let pk: Vec<(usize, usize)> = cfg.partitions.iter().map(|q| (q.p(), q.k())).collect();
-    let predicted_n: Vec<f64> = pk.iter().map(|&(p, k)| eq(p, k, &coef, 0.0)).collect();
-    let predicted_n_ext: Vec<f64> = pk.iter().map(|&(p, k)| eq(p, k, &coef, c_m)).collect();
+    let predicted_n: Vec<f64> = pk.iter().map(|&(p, k)| eq(p, k, &coef)).collect();
+    let predicted_n_ext: Vec<f64> = structure
+        .iter()
+        .map(|m| {
+            if m.k() == 0 {
+                n_pf
+            } else {
+                equal_cost_particles_structural(&structure[0], m, n_pf, &coef, c_m)
+            }
+        })
+        .collect();
     let rel = |pred: &[f64]| {
         measured_n
             .iter()
@@ -359,11 +383,11 @@ pub fn model_prediction(
             .map(|(&n, &p)| (n as f64 - p) / p)
             .collect()
     };
-    ModelPrediction {
+    Ok(ModelPrediction {
         calibration: cal,
         predicted_n_range: pk
             .iter()
-            .map(|&(p, k)| report.interval(|c| eq(p, k, &c.coefficients(), 0.0)))
+            .map(|&(p, k)| report.interval(|c| eq(p, k, &c.coefficients())))
             .collect(),
         rel_error: rel(&predicted_n),
         rel_error_ext: rel(&predicted_n_ext),
@@ -373,16 +397,17 @@ pub fn model_prediction(
         terms: cfg
             .partitions
             .iter()
-            .map(|q| PartitionTerms {
+            .zip(&structure)
+            .map(|(q, m)| PartitionTerms {
                 name: q.name(),
                 p: q.p(),
                 k: q.k(),
-                ours: per_particle_terms(q.p(), q.k(), &coef, c_m),
+                ours: structural_terms(m, &coef, c_m),
                 paper: per_particle_terms(q.p(), q.k(), &EfCoefficients::default(), 0.0),
             })
             .collect(),
         notes: report.notes.clone(),
-    }
+    })
 }
 
 /// Table II: the PF's time with `N_PF` particles is the target; for each MPF partition the
@@ -438,7 +463,7 @@ pub fn table2_with(cfg: &TableConfig, calibration: &CalibrationReport) -> Result
         target,
         reached,
         rmse_over_time: curves,
-        model: Some(model_prediction(cfg, calibration, target, &measured_n)),
+        model: Some(model_prediction(cfg, calibration, target, &measured_n)?),
     })
 }
 

@@ -12,11 +12,10 @@
 //! One calibration serves Fig. 3 and Table II. A calibration never fails the section: its
 //! degenerate fits fall back with a note (`pf_mpf::calibrate::fit_timings`), shown here.
 
-use pf_mpf::calibrate::calibrate_report;
 use pf_mpf::complexity::PerParticleTerms;
 use pf_mpf::experiments::{
     Fig3Config, Fig3Result, ModelPrediction, RatioConfig, RatioResult, TableConfig, TableReport,
-    TableResult, TracesConfig, fig3_with, ratio, table2_with, table3,
+    TableResult, TracesConfig, fig3_calibrated, ratio, table2_with, table3,
 };
 use serde::Serialize;
 
@@ -68,9 +67,9 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         seed: ctx.seed,
         ..Fig3Config::at_scale(scale)
     };
-    // Errors only on a bad configuration; degenerate timings fall back with a note.
-    let calibration = calibrate_report(&fig3_cfg.calibration).map_err(mpf)?;
-    let fig3_result = fig3_with(&fig3_cfg, &calibration).map_err(mpf)?;
+    // The calibration runs interleaved with Fig. 3's timings and serves Table II too; it
+    // errs only on a bad configuration (degenerate timings fall back with a note).
+    let (fig3_result, calibration) = fig3_calibrated(&fig3_cfg).map_err(mpf)?;
     bar.inc(1);
     let table_cfg = TableConfig {
         seed: ctx.seed,
