@@ -67,7 +67,7 @@ mod thread_clock {
         // SAFETY: `ts` is a valid, writable `struct timespec` for the duration of the call,
         // and `clock_gettime` writes nothing else.
         let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-        (rc == 0).then(|| ts.tv_sec as f64 * 1e9 + ts.tv_nsec as f64)
+        (rc == 0).then_some(ts.tv_sec as f64 * 1e9 + ts.tv_nsec as f64)
     }
 }
 
@@ -336,12 +336,14 @@ fn solve_small(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
         }
         a.swap(col, piv);
         b.swap(col, piv);
-        for row in col + 1..n {
-            let f = a[row][col] / a[col][col];
-            for k in col..n {
-                a[row][k] -= f * a[col][k];
+        let (top, rest) = a.split_at_mut(col + 1);
+        let pivot_row = &top[col];
+        for (off, r) in rest.iter_mut().enumerate() {
+            let f = r[col] / pivot_row[col];
+            for (x, p) in r[col..].iter_mut().zip(&pivot_row[col..]) {
+                *x -= f * p;
             }
-            b[row] -= f * b[col];
+            b[col + 1 + off] -= f * b[col];
         }
     }
     let mut x = vec![0.0; n];
@@ -1086,14 +1088,14 @@ mod tests {
 
     #[test]
     fn degenerate_timings_fall_back_without_error_or_nan() {
-        let cases: [(&str, Box<dyn Fn(f64, usize) -> f64>); 4] = [
-            ("all zero", Box::new(|_, _| 0.0)),
-            ("constant", Box::new(|_, _| 1000.0)),
-            ("falling", Box::new(|x, _| 1e6 / (1.0 + x))),
-            (
-                "not finite",
-                Box::new(|_, r| if r % 2 == 0 { f64::NAN } else { f64::INFINITY }),
-            ),
+        type Machine = fn(f64, usize) -> f64;
+        let cases: [(&str, Machine); 4] = [
+            ("all zero", |_, _| 0.0),
+            ("constant", |_, _| 1000.0),
+            ("falling", |x, _| 1e6 / (1.0 + x)),
+            ("not finite", |_, r| {
+                if r % 2 == 0 { f64::NAN } else { f64::INFINITY }
+            }),
         ];
         for (name, f) in cases {
             let rep = fit_timings(&synthetic(4, f), 20, 0);

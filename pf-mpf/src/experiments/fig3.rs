@@ -182,7 +182,7 @@ fn matrices_pk<const P: usize, const K: usize>(
         &to_dynamic(m.p0_k()),
         radar.n_steps.min(10),
     )
-    .ok_or_else(|| MpfError::NotPositiveDefinite {
+    .ok_or(MpfError::NotPositiveDefinite {
         what: "M_t of the structural flop count",
         t: 0,
         particle: 0,

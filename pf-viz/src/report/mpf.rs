@@ -643,6 +643,56 @@ mod tests {
         }
     }
 
+    /// Timings that say nothing (all zero, as from a clock that does not move) give the
+    /// fall-back calibration with a note, and Fig. 3, Table II and the section's tables and
+    /// notes built on it come out without an error or a NaN.
+    #[test]
+    fn a_degenerate_calibration_does_not_fail_the_section() {
+        use pf_mpf::calibrate::{Calibration, Timings, fit_timings};
+        use pf_mpf::experiments::{Scale, fig3_with};
+        let zeros = |m: usize| vec![vec![0.0; 3]; m];
+        let timings = Timings {
+            flops: vec![3e3, 6e3, 1.2e4],
+            product_ns: zeros(3),
+            n: vec![200.0, 400.0],
+            likelihood_ns: zeros(2),
+            resample_ns: zeros(2),
+            randn_ns: zeros(2),
+        };
+        let cal = fit_timings(&timings, 10, 0);
+        assert_eq!(cal.calibration, Calibration::FALLBACK);
+        assert!(!cal.notes.is_empty());
+        let mut f_cfg = Fig3Config::at_scale(Scale::Quick);
+        f_cfg.n_particles = 50;
+        f_cfg.reps = 1;
+        f_cfg.radar.n_steps = 5;
+        let f = fig3_with(&f_cfg, &cal).unwrap();
+        assert!(f.rows.iter().all(|r| r.predicted_s.is_finite()
+            && r.predicted_ext_s.is_finite()
+            && r.rel_error.is_finite()));
+        let mut t_cfg = TableConfig::at_scale(Scale::Quick);
+        t_cfg.n_pf = 50;
+        t_cfg.n_mc = 2;
+        t_cfg.radar.n_steps = 5;
+        let t2 = table2_with(&t_cfg, &cal).unwrap();
+        let m = t2.model.as_ref().unwrap();
+        assert!(
+            m.predicted_n
+                .iter()
+                .chain(&m.predicted_n_ext)
+                .all(|n| n.is_finite())
+        );
+        let text = format!("{}{:?}", why_fewer(m), terms_table(m).rows);
+        assert!(!text.contains("NaN") && !text.contains("inf"), "{text}");
+        assert!(
+            !table_of("table2", "", &t2)
+                .rows
+                .iter()
+                .flatten()
+                .any(|c| c.contains("NaN"))
+        );
+    }
+
     /// The verdict agrees with the paper only when both RMSEs fall, and says so otherwise.
     #[test]
     fn the_marginalization_verdict_follows_table_two() {
