@@ -22,6 +22,7 @@
 use crate::complexity::EfCoefficients;
 use crate::error::{MpfError, Result};
 use crate::radar::RadarObs;
+use pf_core::filter::batch::{BatchModel, Cols, ColsMut};
 use pf_core::params::{self, ParamError};
 use pf_core::resample::{Resample, Resampler};
 use rand::RngExt;
@@ -959,6 +960,129 @@ pub fn measure(cfg: &CalibrateConfig) -> Result<Timings> {
     })
 }
 
+/// The time of each stage of one filter step, per particle (ns), measured on a
+/// [`BatchModel`]: what Table I and `c1, c2, c3` stand for, on the filter's own code.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct StageTimes {
+    /// The step's standard normals, `noise_dim` per particle (pf-core's `LaneRng`):
+    /// eq. (11)'s `p c3`.
+    pub normals_ns: f64,
+    /// `propagate` from the resampled parents: eq. (11)'s flops (Table I's time update).
+    pub propagate_ns: f64,
+    /// `add_log_likelihood` and the weights' normalisation: eq. (11)'s `c1`.
+    pub likelihood_ns: f64,
+    /// Systematic resampling and the gather of the `dim` state columns: eq. (11)'s `c2`.
+    pub resample_ns: f64,
+}
+
+impl StageTimes {
+    /// Their sum.
+    pub fn total_ns(&self) -> f64 {
+        self.normals_ns + self.propagate_ns + self.likelihood_ns + self.resample_ns
+    }
+}
+
+/// Time each stage of a step of `model` with `n` particles at time `t` (observation `y`),
+/// each stage on its own over all particles, interleaved over `rounds` rounds, median per
+/// stage ([`Stopwatch`]: the thread's CPU time). The particles start from the model's
+/// `initial` draw. Single-threaded; meant for a model whose `propagate` and likelihood are
+/// plain loops over the particle columns, as the batch engine calls them.
+///
+/// # Errors
+/// `n = 0` or `rounds = 0`.
+pub fn stage_times<M>(
+    model: &M,
+    t: usize,
+    y: &M::Obs,
+    n: usize,
+    rounds: usize,
+    seed: u64,
+) -> Result<StageTimes>
+where
+    M: BatchModel<Input = ()>,
+{
+    params::at_least_one("N", n)?;
+    params::at_least_one("rounds", rounds)?;
+    let (dim, q) = (model.dim(), model.noise_dim());
+    let mut lanes = pf_core::simd::LaneRng::from_rng(&mut pf_core::mc::stream_rng(seed, 1));
+    let mut z0 = vec![0.0; model.initial_noise_dim() * n];
+    lanes.fill_normal(&mut z0);
+    let mut parents = vec![0.0; dim * n];
+    model.initial(
+        Cols::new(&z0, model.initial_noise_dim(), n),
+        ColsMut::new(&mut parents, dim, n),
+    );
+    let mut z = vec![0.0; q * n];
+    let mut x = vec![0.0; dim * n];
+    let (mut lw, mut w) = (vec![0.0; n], vec![1.0 / n as f64; n]);
+    let mut anc = vec![0usize; n];
+    let mut gathered = vec![0.0; dim * n];
+    let mut rng = pf_core::mc::stream_rng(seed, 2);
+    let mut times: Vec<Vec<f64>> = (0..4).map(|_| Vec::with_capacity(rounds)).collect();
+    let mut inner = [0usize; 4];
+    // Each stage is timed over blocks of at least MIN_BLOCK_NS, the stages in turn.
+    let mut time = |j: usize, f: &mut dyn FnMut(), first: bool| {
+        if first {
+            inner[j] = calls_per_block(f);
+        }
+        times[j].push(block_ns(inner[j], f));
+    };
+    for r in 0..rounds {
+        time(
+            0,
+            &mut || {
+                lanes.fill_normal(&mut z);
+                black_box(&z);
+            },
+            r == 0,
+        );
+        time(
+            1,
+            &mut || {
+                model.propagate(
+                    t,
+                    &(),
+                    Cols::new(&parents, dim, n),
+                    Cols::new(&z, q, n),
+                    ColsMut::new(&mut x, dim, n),
+                );
+                black_box(&x);
+            },
+            r == 0,
+        );
+        time(
+            2,
+            &mut || {
+                lw.fill(0.0);
+                model.add_log_likelihood(t, y, Cols::new(&x, dim, n), &mut lw);
+                let _ = pf_core::weights::normalise(t, &mut lw, &mut w);
+                black_box(&w);
+            },
+            r == 0,
+        );
+        time(
+            3,
+            &mut || {
+                Resampler::Systematic.resample(&w, &mut rng, &mut anc);
+                for (src, dst) in x.chunks_exact(n).zip(gathered.chunks_exact_mut(n)) {
+                    for (d, &a) in dst.iter_mut().zip(&anc) {
+                        *d = src[a];
+                    }
+                }
+                black_box(&gathered);
+            },
+            r == 0,
+        );
+    }
+    let per = |v: &[f64]| median(v) / n as f64;
+    Ok(StageTimes {
+        normals_ns: per(&times[0]),
+        propagate_ns: per(&times[1]),
+        likelihood_ns: per(&times[2]),
+        resample_ns: per(&times[3]),
+    })
+}
+
 /// Calibrate the EF model on this machine (Section IV-A, steps 1–3): [`measure`], then
 /// [`fit_timings`].
 ///
@@ -997,6 +1121,59 @@ mod tests {
                 assert!(g <= 1e-8 * scale, "gradient {g} > 0 on zero c[{j}]");
             }
         }
+    }
+
+    /// A 2-D random walk observed in its first component, for the stage profiler.
+    struct Walk;
+
+    impl BatchModel for Walk {
+        type Obs = f64;
+        type Input = ();
+        fn dim(&self) -> usize {
+            2
+        }
+        fn noise_dim(&self) -> usize {
+            2
+        }
+        fn initial(&self, z: Cols<'_>, mut x: ColsMut<'_>) {
+            for k in 0..2 {
+                x.col_mut(k).copy_from_slice(z.col(k));
+            }
+        }
+        fn propagate(&self, _t: usize, _u: &(), p: Cols<'_>, z: Cols<'_>, mut x: ColsMut<'_>) {
+            for k in 0..2 {
+                for ((x, &p), &z) in x.col_mut(k).iter_mut().zip(p.col(k)).zip(z.col(k)) {
+                    *x = p + z;
+                }
+            }
+        }
+        fn add_log_likelihood(&self, _t: usize, y: &f64, x: Cols<'_>, lw: &mut [f64]) {
+            for (l, &x) in lw.iter_mut().zip(x.col(0)) {
+                *l += -0.5 * (y - x) * (y - x);
+            }
+        }
+    }
+
+    /// The profiler runs every stage of a step on a model and reports a non-negative,
+    /// finite cost per particle for each (no assertion on the times themselves).
+    #[test]
+    fn stage_times_cover_every_stage() {
+        let st = stage_times(&Walk, 1, &0.3, 256, 2, 7).unwrap();
+        for v in [
+            st.normals_ns,
+            st.propagate_ns,
+            st.likelihood_ns,
+            st.resample_ns,
+        ] {
+            assert!(v.is_finite() && v >= 0.0, "{st:?}");
+        }
+        assert!(
+            (st.total_ns() - st.normals_ns - st.propagate_ns - st.likelihood_ns - st.resample_ns)
+                .abs()
+                < 1e-9
+        );
+        assert!(stage_times(&Walk, 1, &0.3, 0, 2, 7).is_err());
+        assert!(stage_times(&Walk, 1, &0.3, 8, 0, 7).is_err());
     }
 
     #[test]

@@ -10,8 +10,8 @@
 
 use super::Scale;
 use crate::calibrate::{
-    CalibrateConfig, Calibration, CalibrationReport, CalibrationSpread, Stopwatch, Timings,
-    fit_timings, measure, median,
+    CalibrateConfig, Calibration, CalibrationReport, CalibrationSpread, StageTimes, Stopwatch,
+    Timings, fit_timings, measure, median,
 };
 use crate::complexity::{Alg1Matrices, ef_ct_zero, ef_structural, fit_state_traffic};
 use crate::error::{MpfError, Result};
@@ -110,6 +110,15 @@ pub struct Fig3Row {
     /// Fastest and slowest round (s).
     #[serde(default)]
     pub measured_range_s: (f64, f64),
+    /// Table I's per-particle flops counted on the partition's nonzeros
+    /// ([`Alg1Matrices::flops_per_particle`]), against eq. (11)'s dense count.
+    #[serde(default)]
+    pub flops_structural: f64,
+    /// Each stage of a step of this partition's filter timed on its own, per particle
+    /// ([`stage_times`](crate::calibrate::stage_times)); `None` where the partition's filter
+    /// is not a [`BatchModel`](pf_core::filter::batch::BatchModel).
+    #[serde(default)]
+    pub stages: Option<StageTimes>,
 }
 
 /// Fig. 3's data.
@@ -329,6 +338,8 @@ fn fig3_from(
                 predicted_ext_s,
                 rel_error_ext: (predicted_ext_s - measured_s) / measured_s,
                 measured_range_s: lo_hi,
+                flops_structural: m.flops_per_particle(),
+                stages: None,
             }
         })
         .collect();

@@ -12,7 +12,7 @@
 //! One calibration serves Fig. 3 and Table II. A calibration never fails the section: its
 //! degenerate fits fall back with a note (`pf_mpf::calibrate::fit_timings`), shown here.
 
-use pf_mpf::complexity::PerParticleTerms;
+use pf_mpf::complexity::{PerParticleTerms, per_particle_terms};
 use pf_mpf::experiments::{
     Fig3Config, Fig3Result, ModelPrediction, RatioConfig, RatioResult, TableConfig, TableReport,
     TableResult, TracesConfig, fig3_calibrated, ratio, table2_with, table3,
@@ -224,6 +224,9 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     if let Some(m) = &t2.model {
         tables.push(terms_table(m));
     }
+    if let Some(t) = stages_table(&fig3_result, fig3_cfg.radar.n_steps) {
+        tables.push(t);
+    }
 
     let pf_time = t3.table.partitions[0].time_s;
     let full = t3.table.partitions.iter().find(|r| r.name == "PPKKKK");
@@ -359,6 +362,64 @@ fn why_fewer(m: &ModelPrediction) -> String {
         stays(&pf.ours),
         stays(&pf.paper),
     )
+}
+
+/// Each stage of a step, measured on its own, beside the model's term for it (ns per
+/// particle), for the first partition of each k; `None` without stage timings.
+fn stages_table(f: &Fig3Result, t_f: usize) -> Option<Table> {
+    let c = &f.calibration;
+    let ns = |ef: f64| ef * c.flop_ns;
+    let per_step = |s: f64| s * 1e9 / (t_f as f64 * f.n_particles as f64);
+    let mut rows = Vec::new();
+    let mut seen = Vec::new();
+    for r in &f.rows {
+        let Some(st) = r.stages else { continue };
+        if seen.contains(&r.k) {
+            continue;
+        }
+        seen.push(r.k);
+        let dense = per_particle_terms(r.p, r.k, &c.coefficients(), 0.0).flops;
+        let measured = per_step(r.measured_s);
+        rows.push(vec![
+            format!("{} (k = {})", r.name, r.k),
+            format!("{:.1} [{:.1}]", st.normals_ns, ns(r.p as f64 * c.c3)),
+            format!(
+                "{:.1} [{:.1} / {:.1}]",
+                st.propagate_ns,
+                ns(dense),
+                ns(r.flops_structural)
+            ),
+            format!("{:.1} [{:.1}]", st.likelihood_ns, ns(c.c1)),
+            format!("{:.1} [{:.1}]", st.resample_ns, ns(c.c2)),
+            format!("{measured:.1}"),
+            format!("{:.1}", measured - st.total_ns()),
+        ]);
+    }
+    if rows.is_empty() {
+        return None;
+    }
+    Some(Table {
+        id: "stages".into(),
+        caption: format!(
+            "Each stage of one filter step timed on its own (thread CPU time, ns per \
+             particle, N = {}), against the calibrated model's term for it in brackets: \
+             random numbers p·c3, the time update against Table I's flops (eq. (11)'s dense \
+             count / counted on the model's nonzeros), the likelihood c1 and resampling c2. \
+             'Left out' is the whole step's measured time (Fig. 3) less the four stages: \
+             what the engine spends around them, which no term of eq. (11) counts.",
+            f.n_particles
+        ),
+        header: vec![
+            "partition".into(),
+            "normals [p·c3]".into(),
+            "time update [flops: eq. (11) / nonzeros]".into(),
+            "likelihood [c1]".into(),
+            "resampling [c2]".into(),
+            "whole step".into(),
+            "left out".into(),
+        ],
+        rows,
+    })
 }
 
 fn terms_table(m: &ModelPrediction) -> Table {
