@@ -9,7 +9,7 @@ use criterion::{
 };
 use nalgebra::{DMatrix, DVector};
 use pf_core::StateSpaceModel;
-use pf_core::filter::{BatchBootstrap, BatchConfig, FilterConfig, ParticleFilter};
+use pf_core::filter::{BatchBootstrap, BatchConfig, BatchFilter, FilterConfig, ParticleFilter};
 use pf_core::kalman::LinearGaussian;
 use pf_core::mc::Par;
 use pf_core::mc::stream_rng;
@@ -179,6 +179,29 @@ fn linear_gaussian(c: &mut Criterion) {
     group.sample_size(10);
     for n in [1_000usize, 10_000] {
         bench_generic(&mut group, model.clone(), n, &ys);
+    }
+    group.finish();
+    // The same model on the batch engine (`LinearGaussian::batch`), one thread and the pool.
+    let batch = model.batch().expect("no inputs");
+    let mut group = c.benchmark_group("batch_linear_gaussian");
+    group.sample_size(10);
+    for n in [1_000usize, 10_000, 100_000, 1_000_000] {
+        group.throughput(Throughput::Elements((n * ys.len()) as u64));
+        for par in [Par::Seq, Par::Rayon] {
+            let cfg = BatchConfig {
+                par,
+                ..BatchConfig::new(n, 2)
+            };
+            let mut f = BatchFilter::new(batch.clone(), cfg).expect("valid config");
+            let name = if par == Par::Seq {
+                "one_thread"
+            } else {
+                "pool"
+            };
+            group.bench_function(BenchmarkId::new(name, format!("N={n}")), |b| {
+                b.iter(|| black_box(f.run(&ys).expect("filter runs").log_lik))
+            });
+        }
     }
     group.finish();
 }

@@ -1,4 +1,5 @@
 //! `pf-viz bench bootstrap`: the speed of the AR(1)+noise bootstrap filter on this machine;
+//! `pf-viz bench filter`: the same for the papers' filters on the batch engine;
 //! `pf-viz bench genealogy`: the memory of pruned path storage.
 //!
 //! The filter is pf-core's structure-of-arrays fast path ([`BatchBootstrap`]): φ = 0.98,
@@ -18,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use pf_core::filter::{FilterConfig, ParticleFilter};
 use pf_core::observe::AncestryRecorder;
 
-use crate::cli::{BenchBootstrapArgs, BenchGenealogyArgs};
+use crate::cli::{BenchBootstrapArgs, BenchFilterArgs, BenchGenealogyArgs, BenchModel};
 use crate::data::read_y;
 use crate::error::{Result, VizError};
 
@@ -100,34 +101,137 @@ pub fn bootstrap(args: &BenchBootstrapArgs) -> Result<BenchResult> {
         ..BatchConfig::new(args.particles, args.seed)
     };
     let mut filter = BatchBootstrap::new(model, cfg).map_err(VizError::core("bench"))?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads)
-        .build()
-        .map_err(|e| invalid(format!("cannot start {} threads: {e}", args.threads)))?;
-    // `run` restarts the filter's streams from the seed, so every run computes the same.
-    let mut times = Vec::with_capacity(args.repeat);
-    let mut loglik = f64::NAN;
-    for _ in 0..args.repeat {
-        let (seconds, run) = pool.install(|| {
-            let start = Instant::now();
-            let run = filter.run(&obs);
-            (start.elapsed().as_secs_f64(), run)
-        });
-        loglik = run.map_err(VizError::core("bench"))?.log_lik;
-        times.push(seconds);
-    }
-    times.sort_by(f64::total_cmp);
-    let seconds = times[0];
     let steps = ys.len() - 1;
+    let runs = time_runs(args.threads, args.repeat, || {
+        filter
+            .run(&obs)
+            .map(|s| s.log_lik)
+            .map_err(VizError::core("bench"))
+    })?;
     Ok(BenchResult {
         particles: args.particles,
         steps,
         threads: args.threads,
-        seconds,
-        ns_per_particle_step: seconds * 1e9 / (args.particles as f64 * steps as f64),
-        loglik,
+        seconds: runs.seconds,
+        ns_per_particle_step: runs.seconds * 1e9 / (args.particles as f64 * steps as f64),
+        loglik: runs.loglik,
         repeat: args.repeat,
+        seconds_median: runs.seconds_median,
+    })
+}
+
+/// The fastest and the median of `repeat` timed runs, and the last run's log-likelihood.
+struct Runs {
+    seconds: f64,
+    seconds_median: f64,
+    loglik: f64,
+}
+
+/// Time `repeat` runs of `run` (each a whole filter run from the start, so each computes
+/// the same) on a pool of `threads` workers.
+fn time_runs(
+    threads: usize,
+    repeat: usize,
+    mut run: impl FnMut() -> Result<f64> + Send,
+) -> Result<Runs> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| VizError::Argument {
+            message: format!("cannot start {threads} threads: {e}"),
+        })?;
+    let mut times = Vec::with_capacity(repeat);
+    let mut loglik = f64::NAN;
+    for _ in 0..repeat {
+        let (seconds, ll) = pool.install(|| {
+            let start = Instant::now();
+            let ll = run();
+            (start.elapsed().as_secs_f64(), ll)
+        });
+        loglik = ll?;
+        times.push(seconds);
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(Runs {
+        seconds: times[0],
         seconds_median: times[times.len() / 2],
+        loglik,
+    })
+}
+
+/// The JSON contract of `pf-viz bench filter --json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FilterBenchResult {
+    /// `ar1`, `radar` or `bearings`.
+    pub model: String,
+    /// N.
+    pub particles: usize,
+    /// Steps filtered.
+    pub steps: usize,
+    /// Worker threads.
+    pub threads: usize,
+    /// Wall-clock seconds of filtering (the fastest of the `repeat` runs).
+    pub seconds: f64,
+    /// `seconds / (N·steps)` in nanoseconds.
+    pub ns_per_particle_step: f64,
+    /// The filter's log-likelihood estimate.
+    pub loglik: f64,
+    /// Runs timed (`--repeat`).
+    pub repeat: usize,
+    /// The median of the runs' seconds.
+    pub seconds_median: f64,
+}
+
+/// Run `pf-viz bench filter`.
+///
+/// # Errors
+/// Bad arguments, unreadable data, or a filter failure.
+pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
+    let invalid = |message: String| VizError::Argument { message };
+    if args.particles == 0 {
+        return Err(invalid("--particles must be at least 1".into()));
+    }
+    crate::error::check_threads("--threads", args.threads)?;
+    if args.repeat == 0 {
+        return Err(invalid("--repeat must be at least 1".into()));
+    }
+    if args.steps == Some(0) {
+        return Err(invalid("--steps must be at least 1".into()));
+    }
+    let (name, steps, runs) = match args.model {
+        BenchModel::Ar1 => {
+            let ar1 = BenchBootstrapArgs {
+                data: args.data.clone(),
+                particles: args.particles,
+                steps: args.steps,
+                threads: args.threads,
+                resampler: pf_core::resample::Resampler::Systematic,
+                seed: args.seed,
+                repeat: args.repeat,
+                json: args.json,
+            };
+            let r = bootstrap(&ar1)?;
+            let runs = Runs {
+                seconds: r.seconds,
+                seconds_median: r.seconds_median,
+                loglik: r.loglik,
+            };
+            ("ar1", r.steps, runs)
+        }
+        BenchModel::Radar | BenchModel::Bearings => {
+            return Err(invalid("this model is not on the batch engine yet".into()));
+        }
+    };
+    Ok(FilterBenchResult {
+        model: name.into(),
+        particles: args.particles,
+        steps,
+        threads: args.threads,
+        seconds: runs.seconds,
+        ns_per_particle_step: runs.seconds * 1e9 / (args.particles as f64 * steps as f64),
+        loglik: runs.loglik,
+        repeat: args.repeat,
+        seconds_median: runs.seconds_median,
     })
 }
 

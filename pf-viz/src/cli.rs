@@ -75,6 +75,52 @@ pub enum BenchCommand {
     Bootstrap(BenchBootstrapArgs),
     /// Memory of pruned path storage (every living trajectory) over a long run.
     Genealogy(BenchGenealogyArgs),
+    /// A papers' filter on the batch engine: the AR(1) bootstrap filter, Karlsson et al.'s
+    /// radar PF (model (13), every state in the PF) or Morelande et al.'s bearings-only PF
+    /// (linearised optimal proposal).
+    Filter(BenchFilterArgs),
+}
+
+/// The models of `pf-viz bench filter`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum BenchModel {
+    /// Cappé & Moulines' AR(1)+noise (φ=0.98, σ=0.2, ρ=1), diffuse prior N(Y_0, ρ²).
+    Ar1,
+    /// Karlsson, Schön & Gustafsson's 6-state radar model (13), the standard PF (PPPPPP).
+    Radar,
+    /// Morelande et al.'s bearings-only scenario, the PF with the linearised optimal proposal.
+    Bearings,
+}
+
+/// Arguments of `pf-viz bench filter`.
+#[derive(Debug, Clone, Args)]
+pub struct BenchFilterArgs {
+    /// Which filter.
+    #[arg(long, value_enum)]
+    pub model: BenchModel,
+    /// Data to filter instead of a simulated scenario: for `ar1` a CSV with a `y` column
+    /// (Y_0…Y_n), for `radar` one with `range,azimuth` columns (one row per step).
+    #[arg(long, value_name = "FILE.csv")]
+    pub data: Option<PathBuf>,
+    /// Number of particles N.
+    #[arg(long, value_name = "N", default_value_t = 10_000)]
+    pub particles: usize,
+    /// Steps n (default: 500 for ar1, 100 for radar, 40 for bearings, or all the data).
+    #[arg(long, value_name = "n")]
+    pub steps: Option<usize>,
+    /// Worker threads within each step (1 to 1024).
+    #[arg(long, value_name = "T", default_value_t = 1, value_parser = thread_count())]
+    pub threads: usize,
+    /// Seed of the simulated data and of the filter's streams.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+    /// Runs of the filter, each from the start with the same seed (so the same estimate):
+    /// `seconds` is the fastest.
+    #[arg(long, value_name = "R", default_value_t = 1)]
+    pub repeat: usize,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `pf-viz bench genealogy`.

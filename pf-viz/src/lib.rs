@@ -76,6 +76,26 @@ pub fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+        Command::Bench(BenchCommand::Filter(args)) => {
+            let r = bench::filter(&args)?;
+            if args.json {
+                cmd::print_json(&r)?;
+            } else {
+                print_line(format_args!(
+                    "{} filter: N = {}, {} steps, {} thread(s): {:.3} s (fastest of {}; median {:.3} s), {:.2} ns per particle-step, log-likelihood {:.3}",
+                    r.model,
+                    r.particles,
+                    r.steps,
+                    r.threads,
+                    r.seconds,
+                    r.repeat,
+                    r.seconds_median,
+                    r.ns_per_particle_step,
+                    r.loglik
+                ))?;
+            }
+            Ok(())
+        }
         Command::Bench(BenchCommand::Genealogy(args)) => {
             let r = bench::genealogy(&args)?;
             if args.json {

@@ -245,3 +245,62 @@ fn counts_beyond_the_machines_memory_are_one_line_errors() {
         );
     }
 }
+
+/// `pf-viz bench filter --model M --json` prints the contract's keys for every model, and the
+/// same estimate, bit for bit, on one thread and on two.
+#[test]
+fn bench_filter_keeps_its_json_contract_for_every_model() {
+    for (model, steps) in [("ar1", "30"), ("radar", "20"), ("bearings", "20")] {
+        let run = |threads: &str| {
+            let o = pf_viz_ok(&[
+                "bench",
+                "filter",
+                "--model",
+                model,
+                "--particles",
+                "5000",
+                "--steps",
+                steps,
+                "--threads",
+                threads,
+                "--json",
+            ]);
+            serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()
+        };
+        let (one, two) = (run("1"), run("2"));
+        for key in [
+            "model",
+            "particles",
+            "steps",
+            "threads",
+            "seconds",
+            "ns_per_particle_step",
+            "loglik",
+        ] {
+            assert!(one.get(key).is_some(), "{model}: missing {key}");
+        }
+        assert_eq!(one["model"], model);
+        assert_eq!(one["particles"], 5000);
+        assert_eq!(one["steps"].to_string(), steps, "{model}");
+        let ll = one["loglik"].as_f64().unwrap();
+        assert!(ll.is_finite(), "{model}: {ll}");
+        assert_eq!(
+            ll.to_bits(),
+            two["loglik"].as_f64().unwrap().to_bits(),
+            "{model}: one thread against two"
+        );
+    }
+    let o = pf_viz(&["bench", "filter", "--model", "bogus"]);
+    assert!(!o.status.success() && o.stdout.is_empty());
+    let o = pf_viz(&[
+        "bench",
+        "filter",
+        "--model",
+        "radar",
+        "--particles",
+        "0",
+        "--json",
+    ]);
+    one_line_error(&o, "bench filter N = 0", &["--particles"]);
+    assert!(o.stdout.is_empty());
+}
