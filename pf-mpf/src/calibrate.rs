@@ -682,9 +682,10 @@ fn fit_medians(flops: &[f64], n: &[f64], med: [&[f64]; 4]) -> Fitted {
 }
 
 /// Fit a calibration to raw timings: medians over rounds, non-negative least-squares lines,
-/// the fall-backs (a line through the origin, then the paper's coefficients), and a bootstrap over rounds (`bootstrap` resamples
-/// drawn from `pf_core::mc::stream_rng(seed, …)`). Never fails and never returns a
-/// non-positive or non-finite coefficient: what could not be fitted is said in `notes`.
+/// the fall-backs (a line through the origin, then the paper's coefficients), and a
+/// bootstrap over rounds (`bootstrap` resamples drawn from
+/// `pf_core::mc::stream_rng(seed, …)`). Never fails and never returns a non-positive or
+/// non-finite coefficient: what could not be fitted is said in `notes`.
 pub fn fit_timings(t: &Timings, bootstrap: usize, seed: u64) -> CalibrationReport {
     let rows = [&t.product_ns, &t.likelihood_ns, &t.resample_ns, &t.randn_ns];
     let medians = |pick: &dyn Fn(&[f64]) -> f64| -> [Vec<f64>; 4] {
