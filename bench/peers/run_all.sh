@@ -3,7 +3,7 @@
 # bootstrap filter on data.csv, then the radar standard PF (model (13), PPPPPP) on radar.csv.
 # Each runs REPEAT times from the same seed (the same estimate) and reports the fastest run
 # and the median. MODELS="ar1" or MODELS="radar" runs one block; `particles` runs the radar
-# filter up to N = RADAR_PARTICLES_MAX (default 10^5: at 10^6 one run takes about 40 s).
+# filter up to N = RADAR_PARTICLES_MAX (default 10^5: at 10^6 one run took 65 s here).
 set -euo pipefail
 cd "$(dirname "$0")"
 PY=${PY:-.venv/bin/python}
