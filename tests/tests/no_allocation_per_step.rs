@@ -24,7 +24,10 @@
 
 use nalgebra::{DMatrix, DVector};
 use pf_core::StateSpaceModel;
-use pf_core::filter::{BatchBootstrap, BatchConfig, FilterConfig, ParticleFilter};
+use pf_core::filter::{
+    BatchBootstrap, BatchConfig, BatchFilter, BatchObserver, FilterConfig, MomentRecorder,
+    ParticleFilter,
+};
 use pf_core::kalman::LinearGaussian;
 use pf_core::mc::{Par, stream_rng};
 use pf_core::models::NoisyAr1;
@@ -113,18 +116,66 @@ fn batch_filter_steps_keep_allocation_out() {
                 ..BatchConfig::new(n, 3)
             };
             let mut f = BatchBootstrap::new(model, cfg).expect("valid config");
-            for &y in &ys[..2] {
-                f.step(y).expect("step runs");
+            for y in &ys[..2] {
+                f.step(y.as_ref()).expect("step runs");
             }
             let count = allocations(|| {
-                for &y in &ys[2..] {
-                    f.step(y).expect("step runs");
+                for y in &ys[2..] {
+                    f.step(y.as_ref()).expect("step runs");
                 }
             });
             assert!(
                 count <= allowed(resampler, n),
                 "N = {n}, {resampler}: {count}"
             );
+        }
+    }
+}
+
+/// The batch filter on a multivariate state (the 2-D linear-Gaussian model: the walk's
+/// positions and the column gathers), bootstrap and guided by the model's own transition,
+/// with every scheme, recording moments into a recorder made with room for the run.
+#[test]
+fn multivariate_batch_filter_steps_keep_allocation_out() {
+    let lg = pf_core::kalman::LinearGaussian::new(
+        nalgebra::DMatrix::from_row_slice(2, 2, &[1.0, 0.5, 0.0, 0.9]),
+        None,
+        nalgebra::DMatrix::from_row_slice(1, 2, &[1.0, 0.0]),
+        nalgebra::DMatrix::from_row_slice(2, 2, &[0.1, 0.02, 0.02, 0.2]),
+        nalgebra::DMatrix::from_row_slice(1, 1, &[0.5]),
+        nalgebra::DVector::from_vec(vec![0.0, 1.0]),
+        nalgebra::DMatrix::identity(2, 2),
+    )
+    .expect("a valid model");
+    let model = lg.batch().expect("no inputs");
+    let ys: Vec<Option<nalgebra::DVector<f64>>> = observations(STEPS + 2)
+        .into_iter()
+        .map(|y| y.map(|y| nalgebra::DVector::from_element(1, y)))
+        .collect();
+    for n in [3_000usize, 40_000] {
+        for resampler in Resampler::ALL {
+            let cfg = BatchConfig {
+                resampler,
+                par: Par::Seq,
+                ..BatchConfig::new(n, 3)
+            };
+            let mut f = BatchFilter::new(model.clone(), cfg).expect("valid config");
+            let mut rec = MomentRecorder::with_capacity(STEPS + 2, 2);
+            rec.on_start(n, 2);
+            for y in &ys[..2] {
+                f.step(y.as_ref()).expect("step runs");
+            }
+            let count = allocations(|| {
+                for y in &ys[2..] {
+                    f.step(y.as_ref()).expect("step runs");
+                    rec.on_step(&f.view().expect("a step was made"));
+                }
+            });
+            assert!(
+                count <= allowed(resampler, n),
+                "N = {n}, {resampler}, 2-D: {count}"
+            );
+            assert_eq!(rec.t.len(), STEPS);
         }
     }
 }

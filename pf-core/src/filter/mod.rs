@@ -20,8 +20,9 @@ mod sir;
 
 pub use crate::model::StepAt;
 pub use batch::{
-    BatchBootstrap, BatchConfig, BatchModel, BatchProposal, BatchTransitionDensity, Cols, ColsMut,
-    ScalarModel, default_chunk,
+    BatchBootstrap, BatchConfig, BatchFilter, BatchModel, BatchMutation, BatchObserver,
+    BatchProposal, BatchTransitionDensity, BatchView, Cols, ColsMut, MomentRecorder, ScalarModel,
+    default_chunk,
 };
 pub use mutation::{Bootstrap, Guided, Mutation};
 pub use policy::{EssThreshold, ResamplePolicy};

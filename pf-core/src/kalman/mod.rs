@@ -34,11 +34,13 @@
 //! - R. H. Shumway, D. S. Stoffer, "An approach to time series smoothing and forecasting
 //!   using the EM algorithm", *J. Time Series Analysis* 3(4), 1982 (lag-one covariances).
 
+mod batch;
 mod kf;
 mod linear_gaussian;
 mod rts;
 mod ukf;
 
+pub use batch::BatchLinearGaussian;
 pub use kf::{KalmanOutput, KalmanState, kalman_filter};
 pub use linear_gaussian::{LinearGaussian, Simulated};
 pub use rts::{SmootherOutput, rts_smoother};

@@ -1,7 +1,7 @@
 //! The noisy AR(1) model of Cappé & Moulines, Section 5.
 
 use crate::error::Result;
-use crate::filter::ScalarModel;
+use crate::filter::{BatchTransitionDensity, Cols, ScalarModel};
 use crate::gaussian::LN_2PI;
 use crate::model::{StateSpaceModel, TransitionDensity};
 use crate::params::{self, ParamError, positive};
@@ -187,6 +187,24 @@ impl ScalarModel for NoisyAr1 {
     #[inline]
     fn log_likelihood_scalar(&self, t: usize, x: f64, y: f64) -> f64 {
         StateSpaceModel::log_likelihood(self, t, &x, &y)
+    }
+}
+
+/// `log f(x | x_prev)` over a chunk, for guided batch proposals.
+impl BatchTransitionDensity for NoisyAr1 {
+    #[inline]
+    fn add_log_transition(
+        &self,
+        _t: usize,
+        _u: &(),
+        parents: Cols<'_>,
+        x: Cols<'_>,
+        out: &mut [f64],
+    ) {
+        for ((o, &x), &xp) in out.iter_mut().zip(x.col(0)).zip(parents.col(0)) {
+            let e = (x - self.phi * xp) * self.inv_sigma;
+            *o += self.log_norm_f - 0.5 * e * e;
+        }
     }
 }
 

@@ -1,20 +1,26 @@
-//! A structure-of-arrays bootstrap filter for scalar-state models: the fast path.
+//! The structure-of-arrays filter: the fast path for every model whose state is a vector
+//! of `f64`.
 //!
 //! The generic [`ParticleFilter`](super::ParticleFilter) calls the model once per particle
-//! and stores states of any type. For a scalar state the same algorithm runs on plain `f64`
-//! arrays, in fixed chunks of [`BatchConfig::chunk`] particles. One step is **one pass over
+//! and stores states of any type. For a state of `D` reals the same algorithm runs on plain
+//! `f64` arrays, `D` columns of them, in fixed chunks of [`BatchConfig::chunk`] particles,
+//! and the model ([`BatchModel`]) is called once per chunk with columns to loop over. A
+//! scalar model ([`ScalarModel`]) is the case `D = 1`. One step is **one pass over
 //! memory**: each output chunk, on its own,
 //!
 //! 1. finds its ancestors (systematic and stratified resampling: it counts offspring
 //!    against the previous step's cumulative weights, so chunks need nothing from each
 //!    other; multinomial and residual resampling run before the pass, in blocks of chunks
-//!    side by side, and the chunk reads their ancestors);
+//!    side by side, and the chunk reads their ancestors) and gathers their states;
 //! 2. draws its standard normals from its own [`LaneRng`] (64 xoshiro256++ lanes and a
 //!    vectorised ziggurat);
-//! 3. gathers, propagates and weighs, and takes the chunk's maximum log-weight;
+//! 3. propagates and weighs through its mutation ([`Bootstrap`], or [`Guided`] by a
+//!    [`BatchProposal`]), and takes the chunk's maximum log-weight;
 //! 4. exponentiates relative to that chunk maximum (a branch-free `exp`) and accumulates
 //!    the chunk's cumulative weights.
 //!
+//! A chunk's states lie together: its `D` columns, `chunk` values apart, then the next
+//! chunk's, so that chunks write disjoint memory and a column of a chunk is one slice.
 //! Steps 2–4 work on L1-resident scratch, compiled for AVX-512 where the CPU has it and
 //! for AVX2 otherwise when it has that ([`crate::simd`]; LLVM vectorises the model's
 //! arithmetic itself; the normals, `exp` and the systematic boundaries call their
@@ -37,27 +43,31 @@
 //! unbiasedness of the likelihood estimate against the Kalman filter's exact value).
 
 use super::{ResamplePolicy, RunSummary, StepReport};
-use crate::buffer::{Line, ParticleBuf};
+use crate::buffer::ParticleBuf;
 use crate::error::{CoreError, Result};
+use crate::filter::{Bootstrap, Guided};
 use crate::limits::{PARTICLE_BUFFERS, check_count, check_memory};
 use crate::mc::{Par, PfRng, stream_rng};
 use crate::params::ParamError;
 use crate::resample::{
-    BLOCK, BlockPlan, Blocked, ChunkSplit, ChunkedWeights, Resampler, SCAN, chunks_per_block,
-    prefix4_each, stratified_index_in,
+    BLOCK, BlockPlan, Blocked, ChunkSplit, ChunkedWeights, Resampler, chunks_per_block,
 };
 use crate::simd::avx512::Avx512;
-use crate::simd::math::{
-    ChunkMap, ceil_index_in, exp_fma_nonpositive, exp_fma_nonpositive_lanes, max_and_flag,
-};
-use crate::simd::{LaneRng, Simd, dispatch, prefetch};
+use crate::simd::{LaneRng, Simd, dispatch};
+use chunk::{ChunkStat, Scratch, Source, StepCtx, WalkHint, chunk_step};
 use rand::RngExt;
 use rayon::prelude::*;
 
+mod chunk;
 mod model;
-pub use model::{BatchModel, BatchProposal, BatchTransitionDensity, Cols, ColsMut, ScalarModel};
+mod mutation;
+mod view;
 
-/// Configuration of [`BatchBootstrap`].
+pub use model::{BatchModel, BatchProposal, BatchTransitionDensity, Cols, ColsMut, ScalarModel};
+pub use mutation::BatchMutation;
+pub use view::{BatchObserver, BatchView, MomentRecorder};
+
+/// Configuration of a [`BatchFilter`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BatchConfig {
     /// Number of particles `N`.
@@ -105,95 +115,28 @@ pub fn default_chunk(n: usize) -> usize {
     if n >= PREFETCH_MIN { 8192 } else { 2048 }
 }
 
-/// Where a step's particles come from.
-#[derive(Debug, Clone, Copy)]
-enum Source {
-    /// `t = 0`: from the initial law.
-    Initial,
-    /// No resampling: particle `i` moves on from particle `i`, keeping its weight.
-    Identity,
-    /// Systematic resampling with the uniform `U`, done by each output chunk.
-    Systematic(f64),
-    /// Stratified resampling with the uniforms `stratum_uniform(key, ·)`, done by each output
-    /// chunk: a stratum's uniform is drawn by its index, since any chunk may need it.
-    Stratified(u64),
-    /// Ancestors already drawn into [`BatchBootstrap::ancestors`].
-    Given,
-}
-
-/// A chunk's summary after a step.
-#[derive(Debug, Clone, Copy)]
-struct ChunkStat {
-    /// Maximum log-weight `m_d` (−∞ if every weight is zero).
-    max: f64,
-    /// The chunk's first NaN or +∞ log-weight: global index and value.
-    bad: Option<(usize, f64)>,
-    /// `Σ exp(l_i − m_d)` and `Σ exp(l_i − m_d)²`.
-    sum: f64,
-    sum_sq: f64,
-}
-
-impl Default for ChunkStat {
-    fn default() -> Self {
-        ChunkStat {
-            max: f64::NEG_INFINITY,
-            bad: None,
-            sum: 0.0,
-            sum_sq: 0.0,
-        }
-    }
-}
-
-/// One worker's scratch, reused for every chunk it processes (it stays in L1/L2).
-#[derive(Debug, Clone)]
-struct Scratch {
-    /// Standard normals, as `f64`s on cache lines ([`Line`]: the normals' and `exp`'s
-    /// twins load and store eight at a time).
-    z: Vec<Line>,
-    /// Ancestors' states, then log-weights, then weights relative to the chunk maximum
-    /// (`PAD` longer than a chunk), on cache lines as `z`.
-    l: Vec<Line>,
-    /// Where this worker's walk stopped in this step (see [`WalkHint`]).
-    hint: WalkHint,
-}
-
-impl Scratch {
-    fn new(c: usize) -> Self {
-        Scratch {
-            z: Line::zeroed_for_f64s(c),
-            l: Line::zeroed_for_f64s(c + PAD),
-            hint: WalkHint::NONE,
-        }
-    }
-}
-
-/// Where a worker's walk stopped in this step: the output it would have written next, and
-/// the first particle of its last block, whose predecessors all have boundaries below that
-/// output. The worker's next chunk, which starts at that output, searches for its first
-/// ancestor from there, among lines the walk has just read, instead of over all N
-/// particles, whose lower levels of bisection miss the caches at N = 10⁷ (see
-/// [`gather_counted`]). Reset at every step, since it speaks of one step's weights.
-#[derive(Debug, Clone, Copy)]
-struct WalkHint {
-    next: usize,
-    from: usize,
-}
-
-impl WalkHint {
-    const NONE: WalkHint = WalkHint {
-        next: usize::MAX,
-        from: 0,
-    };
-}
-
 /// A chunk's random stream, on its own cache lines ([`LaneRng`] is 64-byte aligned), so
 /// that two threads never share one.
 type ChunkRng = LaneRng;
 
-/// The fast bootstrap filter for [`ScalarModel`]s.
-pub struct BatchBootstrap<M> {
+/// From this many particles (the four state and weight arrays then span 8 MiB or more) each
+/// chunk prefetches the memory the next chunk will use (see [`chunk_step`]). Below, the
+/// arrays stay in the caches and the prefetches only cost instructions (3 % at N = 10⁵);
+/// above, they save 5–15 %.
+const PREFETCH_MIN: usize = 1 << 18;
+
+/// The structure-of-arrays particle filter for [`BatchModel`]s, moving particles with the
+/// mutation `Q`: [`Bootstrap`] ([`BatchFilter::new`]) or [`Guided`] ([`BatchFilter::guided`]).
+pub struct BatchFilter<M, Q = Bootstrap> {
     model: M,
+    mutation: Q,
     cfg: BatchConfig,
+    /// `D`.
+    dim: usize,
+    /// Normals per particle: at `t = 0`, and at each later step.
+    noise_initial: usize,
+    noise_step: usize,
+    /// States, chunk after chunk, each chunk `D` columns `chunk` values apart.
     x: ParticleBuf<f64>,
     x_new: ParticleBuf<f64>,
     /// Normalised `log W` (only maintained when the policy may skip resampling).
@@ -225,67 +168,44 @@ pub struct BatchBootstrap<M> {
     split_block: usize,
 }
 
-/// What every chunk of one step reads.
-struct StepCtx<'a, M> {
-    model: &'a M,
-    t: usize,
-    y: Option<f64>,
-    n: usize,
-    c: usize,
-    /// `−log N`, the log-weight after resampling.
-    log_uniform: f64,
-    source: Source,
-    x_old: &'a [f64],
-    lw_old: &'a [f64],
-    cw_old: &'a [f64],
-    offset: &'a [f64],
-    scale: &'a [f64],
-    /// `N / total` of the previous step.
-    n_over_total: f64,
-    ancestors: &'a [usize],
-    keep_lw: bool,
-    /// Whether to prefetch (see [`PREFETCH_MIN`]), and the chunks per worker: a chunk
-    /// prefetches for the next one only within its own group.
-    prefetch: bool,
-    per_group: usize,
-    /// The AVX-512 twins, where the configuration allows them and the CPU has AVX-512.
-    avx512: Option<Avx512>,
-}
-
-impl<M> StepCtx<'_, M> {
-    /// Chunk `d`'s map from its particles' cumulative weights to their scaled global ones.
-    #[inline(always)]
-    fn chunk_map(&self, d: usize) -> ChunkMap {
-        ChunkMap {
-            offset: self.offset[d],
-            scale: self.scale[d],
-            n_over_total: self.n_over_total,
-        }
-    }
-}
-
-/// From this many particles (the four state and weight arrays then span 8 MiB or more) each
-/// chunk prefetches the memory the next chunk will use (see [`chunk_step`]). Below, the
-/// arrays stay in the caches and the prefetches only cost instructions (3 % at N = 10⁵);
-/// above, they save 5–15 %.
-const PREFETCH_MIN: usize = 1 << 18;
+/// The bootstrap filter: the model's own transition as proposal.
+pub type BatchBootstrap<M> = BatchFilter<M, Bootstrap>;
 
 /// The configuration and the last step, not the particle arrays.
-impl<M> std::fmt::Debug for BatchBootstrap<M> {
+impl<M, Q> std::fmt::Debug for BatchFilter<M, Q> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("BatchBootstrap")
+        f.debug_struct("BatchFilter")
             .field("cfg", &self.cfg)
+            .field("dim", &self.dim)
             .field("last", &self.last)
             .finish_non_exhaustive()
     }
 }
 
-impl<M: ScalarModel> BatchBootstrap<M> {
-    /// Allocate every buffer once.
+impl<M: BatchModel> BatchFilter<M, Bootstrap> {
+    /// The bootstrap filter, every buffer allocated once.
     ///
     /// # Errors
-    /// `N = 0`, or a chunk size of 0 or of 2³² or more.
+    /// `N = 0`, a chunk size of 0 or of 2³² or more, a model of dimension 0, or arrays
+    /// larger than the machine holds.
     pub fn new(model: M, cfg: BatchConfig) -> Result<Self> {
+        Self::with_mutation(model, Bootstrap, cfg)
+    }
+}
+
+impl<M: BatchTransitionDensity, P: BatchProposal<M>> BatchFilter<M, Guided<P>> {
+    /// The filter with the importance density `proposal`: each new state is weighed by
+    /// `g f / q`.
+    ///
+    /// # Errors
+    /// As [`BatchFilter::new`].
+    pub fn guided(model: M, proposal: P, cfg: BatchConfig) -> Result<Self> {
+        Self::with_mutation(model, Guided(proposal), cfg)
+    }
+}
+
+impl<M: BatchModel, Q: BatchMutation<M>> BatchFilter<M, Q> {
+    fn with_mutation(model: M, mutation: Q, cfg: BatchConfig) -> Result<Self> {
         if cfg.n_particles == 0 {
             return Err(CoreError::Param(ParamError {
                 name: "N",
@@ -307,17 +227,36 @@ impl<M: ScalarModel> BatchBootstrap<M> {
                 reason: "the chunk size must be below 2³² (a chunk's scratch is meant to stay in cache)",
             }));
         }
+        let dim = model.dim();
+        if dim == 0 {
+            return Err(CoreError::Param(ParamError {
+                name: "dim",
+                value: 0.0,
+                reason: "a batch model's state needs at least one column",
+            }));
+        }
         cfg.policy.validate()?;
         let n = check_count("the number of particles N", cfg.n_particles)?;
-        // Seven arrays of f64 and the ancestors, all of them before any is mapped.
-        let per_particle = 7 * size_of::<f64>() + size_of::<usize>();
-        check_memory(PARTICLE_BUFFERS, n, n.saturating_mul(per_particle))?;
         let chunks = n.div_ceil(cfg.chunk);
-        let mut f = BatchBootstrap {
+        // The states' arrays hold whole chunk slots (the last one padded).
+        let slots = chunks.saturating_mul(cfg.chunk).saturating_mul(dim);
+        // Two state arrays of D columns, five arrays of f64 and the ancestors, all of them
+        // before any is mapped.
+        let per_particle = (2 * dim + 5) * size_of::<f64>() + size_of::<usize>();
+        check_memory(PARTICLE_BUFFERS, n, n.saturating_mul(per_particle))?;
+        let noise_initial = model.initial_noise_dim();
+        let noise_step = mutation.noise_dim(&model);
+        let c = cfg.chunk.min(n);
+        let mut f = BatchFilter {
+            scratch: vec![Scratch::new(c, dim, noise_initial.max(noise_step))],
             model,
+            mutation,
             cfg,
-            x: ParticleBuf::zeroed(n)?,
-            x_new: ParticleBuf::zeroed(n)?,
+            dim,
+            noise_initial,
+            noise_step,
+            x: ParticleBuf::zeroed(slots)?,
+            x_new: ParticleBuf::zeroed(slots)?,
             lw: ParticleBuf::zeroed(n)?,
             lw_new: ParticleBuf::zeroed(n)?,
             cw: ParticleBuf::zeroed(n)?,
@@ -331,7 +270,6 @@ impl<M: ScalarModel> BatchBootstrap<M> {
             offset: vec![0.0; chunks],
             scale: vec![0.0; chunks],
             total: 0.0,
-            scratch: vec![Scratch::new(cfg.chunk.min(n))],
             last: None,
             prefetch_min: PREFETCH_MIN,
             split_block: BLOCK,
@@ -355,9 +293,19 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         self.last = None;
     }
 
-    /// Current particles (empty before the first step and after [`reset`](Self::reset)).
-    pub fn particles(&self) -> &[f64] {
-        if self.last.is_some() { &self.x } else { &[] }
+    /// The model.
+    pub fn model(&self) -> &M {
+        &self.model
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &BatchConfig {
+        &self.cfg
+    }
+
+    /// `D`, the state's dimension.
+    pub fn dim(&self) -> usize {
+        self.dim
     }
 
     /// Time index of the current particles, `None` before the first step.
@@ -376,31 +324,36 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         self.last.map_or(0.0, |r| r.log_lik)
     }
 
-    /// Weighted mean of the current particles.
-    ///
-    /// # Errors
-    /// [`CoreError::Empty`] before the first step (there are no particles yet).
-    pub fn mean(&self) -> Result<f64> {
-        if self.last.is_none() {
-            return Err(CoreError::Empty {
-                what: "particle set (no step made yet)",
-            });
-        }
-        let c = self.cfg.chunk;
-        let mut acc = 0.0;
-        for ((xs, cws), &scale) in self.x.chunks(c).zip(self.cw.chunks(c)).zip(&self.scale) {
-            let mut prev = 0.0;
-            let mut chunk_acc = 0.0;
-            for (x, &cw) in xs.iter().zip(cws) {
-                chunk_acc += x * (cw - prev);
-                prev = cw;
-            }
-            acc += scale * chunk_acc;
-        }
-        Ok(acc / self.total)
+    /// The current particles and weights, `None` before the first step.
+    pub fn view(&self) -> Option<BatchView<'_>> {
+        self.last.map(|report| BatchView {
+            report,
+            x: &self.x,
+            dim: self.dim,
+            n: self.cfg.n_particles,
+            c: self.cfg.chunk,
+            cw: &self.cw,
+            scale: &self.scale,
+            total: self.total,
+        })
     }
 
-    /// One step; `y = None` is a missing observation.
+    /// The view, or the error that there are no particles yet.
+    fn current(&self) -> Result<BatchView<'_>> {
+        self.view().ok_or(CoreError::Empty {
+            what: "particle set (no step made yet)",
+        })
+    }
+
+    /// The weighted means of the current particles' `D` components into `out`.
+    ///
+    /// # Errors
+    /// [`CoreError::Empty`] before the first step; `out` not of length `D`.
+    pub fn mean_into(&self, out: &mut [f64]) -> Result<()> {
+        self.current()?.mean_into(out)
+    }
+
+    /// One step with the input `u_t`; `y = None` is a missing observation.
     ///
     /// With [`Par::Rayon`], a loop of steps called from outside a rayon pool sends each
     /// step's parallel pass to the pool and waits for it; run such a loop inside the pool
@@ -412,7 +365,7 @@ impl<M: ScalarModel> BatchBootstrap<M> {
     /// `k − 1`, as the generic one does (a step writes into the second set of buffers and
     /// swaps them only when it succeeds), but its random streams have moved on: stepping
     /// again draws other numbers than a fresh run would.
-    pub fn step(&mut self, y: Option<f64>) -> Result<StepReport> {
+    pub fn step_with(&mut self, u: &M::Input, y: Option<&M::Obs>) -> Result<StepReport> {
         let n = self.cfg.n_particles;
         let c = self.cfg.chunk;
         let (t, resample, prior_ll) = match self.last {
@@ -459,18 +412,29 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         let per_group = chunks.div_ceil(threads);
         let groups = chunks.div_ceil(per_group);
         if self.scratch.len() < groups {
-            let len = c.min(n);
-            self.scratch.resize_with(groups, || Scratch::new(len));
+            let (len, dim) = (c.min(n), self.dim);
+            let noise = self.noise_initial.max(self.noise_step);
+            self.scratch
+                .resize_with(groups, || Scratch::new(len, dim, noise));
         }
         for s in &mut self.scratch {
             s.hint = WalkHint::NONE;
         }
+        let dim = self.dim;
         let ctx = StepCtx {
             model: &self.model,
+            mutation: &self.mutation,
             t,
+            u,
             y,
             n,
             c,
+            dim,
+            noise: if t == 0 {
+                self.noise_initial
+            } else {
+                self.noise_step
+            },
             log_uniform: -(n as f64).ln(),
             source,
             x_old: &self.x,
@@ -496,9 +460,10 @@ impl<M: ScalarModel> BatchBootstrap<M> {
                 (&'a mut [ChunkStat], &'a mut Scratch),
             ),
         );
+        let slot = dim * c;
         let work = |(g, ((((xs, cws), lws), rngs), (stats, scratch))): GroupWork<'_>| {
             let chunks = xs
-                .chunks_mut(c)
+                .chunks_mut(slot)
                 .zip(cws.chunks_mut(c))
                 .zip(lws.chunks_mut(c))
                 .zip(rngs.iter_mut().zip(stats.iter_mut()));
@@ -523,7 +488,7 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         macro_rules! run_groups {
             ($chunks:ident, $iter:ident) => {
                 self.x_new
-                    .$chunks(gs)
+                    .$chunks(per_group * slot)
                     .zip(self.cw_new.$chunks(gs))
                     .zip(self.lw_new.$chunks(gs))
                     .zip(self.rngs.$chunks(per_group))
@@ -611,22 +576,49 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         );
     }
 
-    /// Filter `y_0, …, y_n` from the start.
+    /// Filter `y_0, …, y_n` from the start with the inputs `u_0, …, u_n` (`None`: the
+    /// default input at every step), telling `observer` about each step.
     ///
     /// # Errors
-    /// An empty sequence or any step error.
-    pub fn run(&mut self, ys: &[Option<f64>]) -> Result<RunSummary> {
+    /// An empty sequence, inputs not one per observation, any step error, or the
+    /// observer's error.
+    pub fn run_observed<O: BatchObserver + Send + ?Sized>(
+        &mut self,
+        us: Option<&[M::Input]>,
+        ys: &[Option<M::Obs>],
+        observer: &mut O,
+    ) -> Result<RunSummary>
+    where
+        M::Obs: Sized,
+        M::Input: Default,
+    {
         if ys.is_empty() {
             return Err(CoreError::Empty {
                 what: "observation sequence",
             });
         }
+        if let Some(us) = us
+            && us.len() != ys.len()
+        {
+            return Err(CoreError::DimensionMismatch {
+                what: "inputs u_t (one per observation)",
+                expected: ys.len(),
+                got: us.len(),
+            });
+        }
         self.reset();
-        let steps = |f: &mut Self| -> Result<RunSummary> {
+        let none = M::Input::default();
+        let steps = |f: &mut Self, observer: &mut O| -> Result<RunSummary> {
+            observer.on_start(f.cfg.n_particles, f.dim);
             let mut reports = Vec::with_capacity(ys.len());
-            for &y in ys {
-                reports.push(f.step(y)?);
+            for (t, y) in ys.iter().enumerate() {
+                let u = us.map_or(&none, |us| &us[t]);
+                reports.push(f.step_with(u, y.as_ref())?);
+                if let Some(view) = f.view() {
+                    observer.on_step(&view);
+                }
             }
+            observer.on_finish()?;
             Ok(RunSummary {
                 log_lik: f.log_likelihood(),
                 reports,
@@ -635,380 +627,65 @@ impl<M: ScalarModel> BatchBootstrap<M> {
         match self.cfg.par {
             // Called from outside the pool, every step's parallel pass would be sent to the
             // pool while this thread sleeps, three threads taking turns on two cores: the
-            // whole run goes to a worker instead (see `step`).
-            Par::Rayon if rayon::current_thread_index().is_none() => rayon::scope(|_| steps(self)),
-            _ => steps(self),
+            // whole run goes to a worker instead (see `step_with`).
+            Par::Rayon if rayon::current_thread_index().is_none() => {
+                rayon::scope(|_| steps(self, observer))
+            }
+            _ => steps(self, observer),
         }
     }
 }
 
-/// One output chunk `d` of a step (see the module docs): ancestors, normals, propagation,
-/// weights, and the chunk's cumulative weights relative to its maximum.
-#[inline(always)]
-fn chunk_step<M: ScalarModel>(
-    ctx: &StepCtx<'_, M>,
-    d: usize,
-    xs: &mut [f64],
-    cws: &mut [f64],
-    lws: &mut [f64],
-    rng: &mut ChunkRng,
-    s: &mut Scratch,
-) -> ChunkStat {
-    let len = xs.len();
-    let lo = d * ctx.c;
-    let (model, t) = (ctx.model, ctx.t);
-    let z = &mut Line::f64s(&mut s.z)[..len];
-    let scratch = Line::f64s(&mut s.l);
-    match ctx.avx512 {
-        Some(cpu) => cpu.fill_normal(rng, z),
-        None => rng.fill_normal_inline(z),
+impl<M: BatchModel<Input = ()>, Q: BatchMutation<M>> BatchFilter<M, Q> {
+    /// One step of a model without inputs (see [`step_with`](Self::step_with)).
+    ///
+    /// # Errors
+    /// As [`step_with`](Self::step_with).
+    pub fn step(&mut self, y: Option<&M::Obs>) -> Result<StepReport> {
+        self.step_with(&(), y)
     }
-    // Propagate. Under systematic and stratified resampling the ancestors' states are
-    // gathered into `l` first (free until the weights are computed), and with an
-    // observation each new state is weighed as it is made: one pass instead of two (about
-    // 3 % at N = 10⁴).
-    let mut weighed = false;
-    match ctx.source {
-        Source::Initial => {
-            for (x, &z) in xs.iter_mut().zip(z.iter()) {
-                *x = model.initial_from_normal(z);
-            }
-        }
-        Source::Identity => {
-            let x_old = &ctx.x_old[lo..lo + len];
-            for ((x, &z), &xp) in xs.iter_mut().zip(z.iter()).zip(x_old) {
-                *x = model.transition_from_normal(t, xp, z);
-            }
-        }
-        Source::Systematic(u) => {
-            let k = |x: f64, a, b| ceil_index_in(x - u, a, b);
-            let twin = ctx.avx512.map(|cpu| (cpu, u));
-            weighed = walk_propagate(ctx, (k, twin), lo, z, xs, scratch, &mut s.hint);
-        }
-        Source::Stratified(key) => {
-            let k = |x, a, b| stratified_index_in(x, key, a, b);
-            weighed = walk_propagate(ctx, (k, None), lo, z, xs, scratch, &mut s.hint);
-        }
-        Source::Given => {
-            gather_propagate(model, t, ctx.x_old, &ctx.ancestors[lo..lo + len], z, xs);
-        }
-    }
-    // The prior log-weight (uniform after resampling, the previous one otherwise) plus the
-    // log-likelihood, in one pass (a fill and then a second pass cost 0.5 instructions per
-    // particle-step).
-    let l = &mut scratch[..len];
-    let lw_old = &ctx.lw_old[lo..lo + len];
-    match (ctx.source, ctx.y) {
-        (Source::Identity, None) => l.copy_from_slice(lw_old),
-        (Source::Identity, Some(y)) => {
-            for ((l, &x), &prior) in l.iter_mut().zip(xs.iter()).zip(lw_old) {
-                *l = prior + model.log_likelihood_scalar(t, x, y);
-            }
-        }
-        (_, None) => l.fill(ctx.log_uniform),
-        (_, Some(_)) if weighed => {}
-        (_, Some(y)) => {
-            for (l, &x) in l.iter_mut().zip(xs.iter()) {
-                *l = ctx.log_uniform + model.log_likelihood_scalar(t, x, y);
-            }
-        }
-    }
-    // Maximum and a flag for NaN or +∞. Adding 0 makes a largest zero `+0` whichever zero
-    // a path kept (`−0` and `+0` tie), so that every path gives the same bits.
-    let (m, bad) = match ctx.avx512 {
-        Some(cpu) => cpu.max_and_flag(l),
-        None => max_and_flag(l),
-    };
-    let m = m + 0.0;
-    if bad {
-        let p = l
-            .iter()
-            .position(|v| v.is_nan() || *v == f64::INFINITY)
-            .unwrap_or(0);
-        return ChunkStat {
-            bad: Some((lo + p, l[p])),
-            ..ChunkStat::default()
-        };
-    }
-    if ctx.keep_lw {
-        lws.copy_from_slice(l);
-    }
-    // Weights relative to the chunk maximum (an all-zero chunk keeps zeros), EXP_LANES at a
-    // time, then their cumulative sums (the resamplers' `prefix4`) with their squares
-    // summed four lanes at a time on the way.
-    let shift = if m == f64::NEG_INFINITY { 0.0 } else { m };
-    // The next chunk of this worker writes its outputs just after these: prefetched now, a
-    // block at a time, they arrive while this chunk computes instead of stalling its stores
-    // (12 % at N = 10⁶ with the adaptive policy, whose log-weights add two arrays).
-    let next_len = if ctx.prefetch && !(d + 1).is_multiple_of(ctx.per_group) {
-        ctx.n.saturating_sub(lo + len).min(ctx.c)
-    } else {
-        0
-    };
-    // The next chunk's outputs (and, without resampling, its inputs), `k` values from offset
-    // `o` on.
-    let ahead = |o: usize| {
-        if o < next_len {
-            let k = EXP_LANES.min(next_len - o);
-            prefetch(xs.as_ptr().wrapping_add(len + o), k);
-            prefetch(cws.as_ptr().wrapping_add(len + o), k);
-            if ctx.keep_lw {
-                prefetch(lws.as_ptr().wrapping_add(len + o), k);
-            }
-            if let Source::Identity = ctx.source {
-                // Without resampling, the next chunk reads these at its own indices.
-                let a = lo + len + o;
-                prefetch(ctx.x_old[a..a + k].as_ptr(), k);
-                prefetch(ctx.lw_old[a..a + k].as_ptr(), k);
-            }
-        }
-    };
-    match (ctx.avx512, next_len) {
-        // On the AVX-512 twin, whose table lookups are permutes in registers.
-        (Some(cpu), 0) => cpu.exp_fma_nonpositive_shifted(l, shift, |_| ()),
-        (Some(cpu), _) => cpu.exp_fma_nonpositive_shifted(l, shift, ahead),
-        (None, _) => {
-            let mut blocks = l.chunks_exact_mut(EXP_LANES);
-            if next_len == 0 {
-                // A loop of its own, so that the prefetches leave the in-cache code as it was.
-                for b in &mut blocks {
-                    exp_block(b, shift);
-                }
-            } else {
-                for (i, b) in (&mut blocks).enumerate() {
-                    ahead(i * EXP_LANES);
-                    exp_block(b, shift);
-                }
-            }
-            for v in blocks.into_remainder() {
-                *v = exp_fma_nonpositive(*v - shift);
-            }
-        }
-    }
-    let mut sq4 = [0.0; 4];
-    let sum = prefix4_each(l, 0.0, cws, |w| {
-        for (sq, &w) in sq4.iter_mut().zip(w) {
-            *sq += w * w;
-        }
-    });
-    ChunkStat {
-        max: m,
-        bad: None,
-        sum,
-        sum_sq: (sq4[0] + sq4[1]) + (sq4[2] + sq4[3]),
+
+    /// Filter `y_0, …, y_n` from the start.
+    ///
+    /// # Errors
+    /// An empty sequence or any step error.
+    pub fn run(&mut self, ys: &[Option<M::Obs>]) -> Result<RunSummary>
+    where
+        M::Obs: Sized,
+    {
+        self.run_observed(None, ys, &mut ())
     }
 }
 
-/// `b[k] ← exp(b[k] − shift)` over one block of [`EXP_LANES`] weights.
-#[inline(always)]
-fn exp_block(b: &mut [f64], shift: f64) {
-    let b: &mut [f64; EXP_LANES] = b.try_into().expect("a block of EXP_LANES");
-    for l in b.iter_mut() {
-        *l -= shift;
-    }
-    exp_fma_nonpositive_lanes(b);
-}
-
-/// The ancestors' states of the outputs `lo ..` into `l` by [`gather_counted`] (its `k`
-/// and `twin`), then [`counted_propagate`] over them: whether it weighed.
-#[inline(always)]
-fn walk_propagate<M: ScalarModel, K: Fn(f64, f64, f64) -> usize>(
-    ctx: &StepCtx<'_, M>,
-    k_twin: (K, Option<(Avx512, f64)>),
-    lo: usize,
-    z: &[f64],
-    xs: &mut [f64],
-    l: &mut [f64],
-    hint: &mut WalkHint,
-) -> bool {
-    let len = xs.len();
-    gather_counted(ctx, k_twin, lo, len, &mut l[..len + PAD], hint);
-    counted_propagate(ctx, z, xs, &mut l[..len])
-}
-
-/// `x_i = f(l_i, z_i)` from the ancestors' states `l` (gathered by [`gather_counted`]),
-/// and with an observation `y`, `l_i ← log(1/N) + log p(y | x_i)` in the same pass; whether
-/// it weighed them.
-#[inline(always)]
-fn counted_propagate<M: ScalarModel>(
-    ctx: &StepCtx<'_, M>,
-    z: &[f64],
-    xs: &mut [f64],
-    l: &mut [f64],
-) -> bool {
-    // Read through `ctx` inside the loop, the model and `t` kept LLVM from vectorising it
-    // (13 % more instructions per particle-step).
-    let (model, t, log_uniform) = (ctx.model, ctx.t, ctx.log_uniform);
-    match ctx.y {
-        Some(y) => {
-            for ((x, &z), l) in xs.iter_mut().zip(z).zip(l) {
-                *x = model.transition_from_normal(t, *l, z);
-                *l = log_uniform + model.log_likelihood_scalar(t, *x, y);
-            }
-            true
-        }
-        None => {
-            for ((x, &z), &xp) in xs.iter_mut().zip(z).zip(&*l) {
-                *x = model.transition_from_normal(t, xp, z);
-            }
-            false
-        }
-    }
-}
-
-/// `x_i = f(x_old[a_i], z_i)`.
-#[inline(always)]
-fn gather_propagate<M: ScalarModel>(
-    model: &M,
-    t: usize,
-    x_old: &[f64],
-    anc: &[usize],
-    z: &[f64],
-    xs: &mut [f64],
-) {
-    for ((x, &z), &a) in xs.iter_mut().zip(z).zip(anc) {
-        *x = model.transition_from_normal(t, x_old[a], z);
-    }
-}
-
-/// Offspring boundary of particle `j`: `k(x_j, 0, N)` at `x_j = G_j·N/T`, where
-/// `G_j = offset_d + scale_d·cw_j` is its global cumulative weight (`k` gives the count of
-/// points below `x_j/N`, clamped and less its second argument); the last particle's
-/// boundary is `N` (the clamp).
-#[inline(always)]
-fn boundary<M>(ctx: &StepCtx<'_, M>, k: impl Fn(f64, f64, f64) -> usize, j: usize) -> usize {
-    if j + 1 >= ctx.n {
-        return ctx.n;
-    }
-    k(ctx.chunk_map(j / ctx.c).x(ctx.cw_old[j]), 0.0, ctx.n as f64)
-}
-
-/// Padding after a chunk's scratch, for the unconditional four-wide stores of
-/// [`gather_counted`].
-const PAD: usize = 4;
-
-/// Weights exponentiated together by [`exp_fma_nonpositive_lanes`]. With 16, LLVM vectorised
-/// across blocks instead (strided loads, a transpose) and the time varied by 30 % from run
-/// to run; with 64 it vectorises each block in place, steadily.
-const EXP_LANES: usize = 64;
-
-/// States of the ancestors of the outputs `lo .. lo + len`, into `out[..len]` (`out` has
-/// [`PAD`] more slots, overwritten freely), under the resampling whose boundaries `k` gives
-/// (see [`boundary`]): `ceil_index_in(x − U, ·)` for systematic resampling,
-/// [`stratified_index_in`] for stratified. `twin`, given only with systematic
-/// resampling's `k`, is the token and `U` for the blocks' boundaries by
-/// [`Avx512::ceil_boundaries`] (the same indices).
-///
-/// Output `i` descends from `A_i = #{j < N − 1 : k_j ≤ i}`, the first particle whose
-/// boundary `k_j` exceeds `i`; so particle `j` fills outputs `k_{j−1} … k_j − 1`. The first
-/// particle with a boundary above `lo` is found by bisection (`k` is non-decreasing),
-/// bracketed by galloping up from `hint` when the worker's previous chunk ended at `lo`; then
-/// the particles are walked in order, their boundaries computed 64 at a time (a vectorised
-/// loop), and each particle's state is written four times at its first output with one
-/// vector store, the next particle starting at its own first output and overwriting the
-/// surplus (a loop only for the rare particle with more than four copies). The previous
-/// states are read in order, never gathered. (This is the resamplers' `Runs` for states;
-/// with [`PAD`] slots of slack the end is checked once per block instead of per particle,
-/// which `Runs::push` would cost the filter about 4 %, measured.)
-#[inline(always)]
-fn gather_counted<M, K: Fn(f64, f64, f64) -> usize>(
-    ctx: &StepCtx<'_, M>,
-    (k, twin): (K, Option<(Avx512, f64)>),
-    lo: usize,
-    len: usize,
-    out: &mut [f64],
-    hint: &mut WalkHint,
-) {
-    let n = ctx.n;
-    let (mut a, mut b) = (0usize, n - 1);
-    if hint.next == lo {
-        // Gallop up from where the worker's last walk stopped, to bracket the bisection.
-        a = hint.from;
-        let mut step = 1;
-        loop {
-            let probe = a + step;
-            if probe >= b {
-                break;
-            }
-            if boundary(ctx, &k, probe) > lo {
-                b = probe;
-                break;
-            }
-            a = probe + 1;
-            step *= 2;
-        }
-    }
-    while a < b {
-        let mid = (a + b) / 2;
-        if boundary(ctx, &k, mid) > lo {
-            b = mid;
+impl<M: ScalarModel, Q: BatchMutation<M>> BatchFilter<M, Q> {
+    /// Current particles (empty before the first step and after
+    /// [`reset`](Self::reset)); a scalar state's column is one slice.
+    pub fn particles(&self) -> &[f64] {
+        if self.last.is_some() {
+            &self.x[..self.cfg.n_particles]
         } else {
-            a = mid + 1;
+            &[]
         }
     }
-    let mut kb = [0usize; SCAN];
-    let (lo_f, hi_f) = (lo as f64, (lo + len) as f64);
-    let mut pos = 0usize;
-    let mut j = a;
-    'walk: while j < n {
-        let d = j / ctx.c;
-        let end = ((d + 1) * ctx.c).min(n);
-        let map = ctx.chunk_map(d);
-        while j < end {
-            let m = (end - j).min(SCAN);
-            if ctx.prefetch {
-                // The previous states and weights of the block after next, while this one is
-                // walked: a block's boundaries and walk take about 50 ns, less than a miss to
-                // memory, and one block ahead was 3 % slower at N = 10⁶.
-                let (a, b) = ((j + 2 * m).min(n), (j + 3 * m).min(n));
-                prefetch(ctx.x_old[a..b].as_ptr(), b - a);
-                prefetch(ctx.cw_old[a..b].as_ptr(), b - a);
-            }
-            // Boundaries relative to lo, capped at the chunk's end.
-            let cw = &ctx.cw_old[j..j + m];
-            match twin {
-                Some((cpu, u)) => cpu.ceil_boundaries(cw, (map, u), (lo_f, hi_f), &mut kb[..m]),
-                None => {
-                    for (kj, &cw) in kb[..m].iter_mut().zip(cw) {
-                        *kj = k(map.x(cw), lo_f, hi_f);
-                    }
-                }
-            }
-            if j + m == n {
-                // The last particle's boundary is N (the clamp).
-                kb[m - 1] = len;
-            }
-            // Past the chunk's end, boundaries are capped at `len`, so further particles
-            // only write into the padding: the end is checked once per block. Boundaries
-            // never decrease, so the next run starts at `k` (as in `Runs::push`).
-            for (&k, &x) in kb[..m].iter().zip(&ctx.x_old[j..j + m]) {
-                // `pos ≤ len < 2³²` (the chunk size is checked): read as 32 bits, it tells
-                // the compiler that `pos + PAD` cannot overflow, which drops one of the two
-                // bound checks per particle (3 % fewer instructions).
-                pos = pos as u32 as usize;
-                out[pos..pos + PAD].copy_from_slice(&[x; PAD]);
-                if k > pos + PAD {
-                    out[pos + PAD..k].fill(x);
-                }
-                debug_assert!(k >= pos, "boundaries never decrease");
-                pos = k;
-            }
-            if pos >= len {
-                *hint = WalkHint {
-                    next: lo + len,
-                    from: j,
-                };
-                break 'walk;
-            }
-            j += m;
-        }
+
+    /// Weighted mean of the current particles.
+    ///
+    /// # Errors
+    /// [`CoreError::Empty`] before the first step (there are no particles yet).
+    pub fn mean(&self) -> Result<f64> {
+        let mut m = [0.0];
+        self.mean_into(&mut m)?;
+        Ok(m[0])
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use super::chunk::{PAD, gather_counted};
     use super::*;
     use crate::filter::EssThreshold;
+    use crate::resample::stratified_index_in;
+    use crate::simd::math::{ceil_index_in, max_and_flag};
 
     fn setup() -> (NoisyAr1, Vec<Option<f64>>) {
         let m = NoisyAr1::new(0.9, 0.5, 1.0).unwrap();
@@ -1120,9 +797,102 @@ mod tests {
         assert_eq!(bits(&par, ll), want);
         let mut stepped = BatchBootstrap::new(m, cfg(Par::Rayon)).unwrap();
         for &y in &ys {
-            stepped.step(y).unwrap();
+            stepped.step(y.as_ref()).unwrap();
         }
         assert_eq!(bits(&stepped, stepped.log_likelihood()), want);
+    }
+
+    /// A multivariate state (3 columns) gives the same bits on one thread and on pools of
+    /// two and three, with the portable kernels, and with the prefetches forced on, for every
+    /// scheme and both policies; its moments through the view agree with the columns read
+    /// out particle by particle.
+    #[test]
+    fn a_multivariate_state_is_identical_for_any_thread_count() {
+        use crate::kalman::LinearGaussian;
+        use nalgebra::{DMatrix, DVector};
+        let lg = LinearGaussian::new(
+            DMatrix::from_row_slice(3, 3, &[0.9, 0.3, 0.0, 0.0, 0.8, 0.2, 0.1, 0.0, 0.7]),
+            None,
+            DMatrix::from_row_slice(1, 3, &[1.0, 0.0, 0.5]),
+            DMatrix::from_row_slice(3, 3, &[0.2, 0.05, 0.0, 0.05, 0.3, 0.02, 0.0, 0.02, 0.1]),
+            DMatrix::from_row_slice(1, 1, &[0.5]),
+            DVector::from_vec(vec![0.0, 1.0, -1.0]),
+            DMatrix::identity(3, 3),
+        )
+        .unwrap();
+        let model = lg.batch().unwrap();
+        let (_, ys) = lg.simulate(25, None, &mut stream_rng(8, 0)).unwrap();
+        let mut ys: Vec<Option<DVector<f64>>> = ys.into_iter().map(Some).collect();
+        ys[4] = None;
+        for resampler in Resampler::ALL {
+            for policy in [
+                ResamplePolicy::Always,
+                ResamplePolicy::EssBelow(EssThreshold::Fraction(0.5)),
+            ] {
+                let run = |par, threads, simd, prefetch_min| {
+                    let cfg = BatchConfig {
+                        chunk: 64,
+                        par,
+                        simd,
+                        resampler,
+                        policy,
+                        ..BatchConfig::new(1000, 7)
+                    };
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .unwrap();
+                    pool.install(|| {
+                        let mut f = BatchFilter::new(model.clone(), cfg).unwrap();
+                        f.prefetch_min = prefetch_min;
+                        f.split_block = 200;
+                        let mut rec = MomentRecorder::default();
+                        let s = f.run_observed(None, &ys, &mut rec).unwrap();
+                        let v = f.view().unwrap();
+                        let mut x = vec![0.0; 3 * 1000];
+                        for (k, col) in x.chunks_mut(1000).enumerate() {
+                            v.column_into(k, col).unwrap();
+                        }
+                        let mut w = vec![0.0; 1000];
+                        v.weights_into(&mut w).unwrap();
+                        // The view's mean is the columns' weighted sum.
+                        let mut mean = [0.0; 3];
+                        v.mean_into(&mut mean).unwrap();
+                        for (k, m) in mean.iter().enumerate() {
+                            let direct: f64 = x[k * 1000..(k + 1) * 1000]
+                                .iter()
+                                .zip(&w)
+                                .map(|(x, w)| x * w)
+                                .sum();
+                            assert!(
+                                (m - direct).abs() < 1e-12 * (1.0 + direct.abs()),
+                                "{k}: {m} {direct}"
+                            );
+                        }
+                        let mut state = [0.0; 3];
+                        v.state_into(517, &mut state).unwrap();
+                        assert_eq!(state, [x[517], x[1517], x[2517]]);
+                        let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                        (
+                            s.log_lik.to_bits(),
+                            bits(&x),
+                            bits(&rec.mean),
+                            bits(&rec.cov),
+                        )
+                    })
+                };
+                let off = PREFETCH_MIN;
+                let seq = run(Par::Seq, 1, Simd::Auto, off);
+                assert_eq!(seq, run(Par::Rayon, 2, Simd::Auto, off), "{resampler}");
+                assert_eq!(seq, run(Par::Rayon, 3, Simd::Auto, off), "{resampler}");
+                assert_eq!(seq, run(Par::Seq, 1, Simd::Portable, off), "{resampler}");
+                assert_eq!(
+                    seq,
+                    run(Par::Rayon, 2, Simd::Auto, 0),
+                    "{resampler}, prefetching"
+                );
+            }
+        }
     }
 
     /// The chunk-local resamplers (bisection, boundaries, four-wide copies) draw exactly
@@ -1140,7 +910,7 @@ mod tests {
             };
             let mut f = BatchBootstrap::new(m, cfg).unwrap();
             for y in &ys[..3] {
-                f.step(*y).unwrap();
+                f.step(y.as_ref()).unwrap();
             }
             // States equal to their indices, so the gathered states are the ancestors.
             let index: Vec<f64> = (0..n).map(|j| j as f64).collect();
@@ -1157,10 +927,14 @@ mod tests {
                 }
                 let ctx = StepCtx {
                     model: &f.model,
+                    mutation: &Bootstrap,
                     t: 3,
+                    u: &(),
                     y: None,
                     n,
                     c: chunk,
+                    dim: 1,
+                    noise: 1,
                     log_uniform: 0.0,
                     source: Source::Identity,
                     x_old: &index,
@@ -1191,7 +965,15 @@ mod tests {
                             hint = WalkHint::NONE;
                         }
                         let len = dst.len();
-                        gather_counted(&ctx, (k, twin), d * chunk, len, &mut out, &mut hint);
+                        gather_counted(
+                            &ctx,
+                            (k, twin),
+                            d * chunk,
+                            len,
+                            &mut out,
+                            &mut hint,
+                            |j, m| index[j..j + m].iter().copied(),
+                        );
                         dst.copy_from_slice(&out[..len]);
                     }
                     all.iter().map(|&a| a as usize).collect::<Vec<_>>()
@@ -1325,23 +1107,23 @@ mod tests {
             let mut f = BatchBootstrap::new(m, cfg).unwrap();
             assert!(matches!(f.mean(), Err(CoreError::Empty { .. })));
             assert!(f.particles().is_empty() && f.t().is_none() && f.last_report().is_none());
-            f.step(ys[0]).unwrap();
-            let ok = f.step(ys[1]).unwrap();
+            f.step(ys[0].as_ref()).unwrap();
+            let ok = f.step(ys[1].as_ref()).unwrap();
             assert_eq!((f.t(), f.last_report()), (Some(1), Some(&ok)));
             let (x, mean) = (f.particles().to_vec(), f.mean().unwrap());
             assert!(matches!(
-                f.step(Some(f64::NAN)),
+                f.step(Some(&f64::NAN)),
                 Err(CoreError::NonFiniteWeight { t: 2, .. })
             ));
             assert_eq!(f.particles(), x);
             assert_eq!(f.mean().unwrap().to_bits(), mean.to_bits());
             assert_eq!(f.log_likelihood(), ok.log_lik);
-            let next = f.step(ys[2]).unwrap();
+            let next = f.step(ys[2].as_ref()).unwrap();
             assert_eq!(next.t, 2);
             assert!(next.log_lik.is_finite() && f.mean().unwrap().is_finite());
             f.reset();
             assert!(f.particles().is_empty() && f.t().is_none());
-            assert!(format!("{f:?}").starts_with("BatchBootstrap { cfg: BatchConfig {"));
+            assert!(format!("{f:?}").starts_with("BatchFilter { cfg: BatchConfig {"));
         }
     }
 
@@ -1411,7 +1193,7 @@ mod tests {
         });
         let tag = probe.unwrap() as usize;
         let mut f = BatchBootstrap::new(NanAt(tag), cfg).unwrap();
-        match f.step(Some(0.0)) {
+        match f.step(Some(&0.0)) {
             Err(CoreError::NonFiniteWeight { t: 0, index, value }) => {
                 assert_eq!(index, 57);
                 assert!(value.is_nan());
