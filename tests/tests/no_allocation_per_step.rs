@@ -12,8 +12,9 @@
 //!
 //! - A state that owns heap memory (a `DVector`) is written into the particles' own
 //!   storage, from the second move on.
-//! - pf-smooth's joint and fixed-lag estimators, attached to a filter, size their caches at
-//!   the first step.
+//! - pf-smooth's joint and fixed-lag estimators on the batch filter keep their sums and
+//!   register in the particles' columns and size their buffers at the start; forward-only
+//!   smoothing sizes its buffers at the first step.
 //!
 //! Everything runs on the test's own thread (`Par::Seq`), and only that thread's
 //! allocations are counted, so the other tests of this binary cannot disturb the count.
@@ -33,7 +34,7 @@ use pf_core::mc::{Par, stream_rng};
 use pf_core::models::NoisyAr1;
 use pf_core::observe::Observer;
 use pf_core::resample::{Resample, Resampler};
-use pf_smooth::{Ar1Data, Ar1Statistics, FixedLag, ForwardSmoothing, PathSpace, Theta};
+use pf_smooth::{Ar1Data, Ar1Statistics, FixedLagTerms, ForwardSmoothing, SmoothedAr1, Theta};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -242,8 +243,10 @@ fn generic_filter_with_vector_states_keeps_allocation_out() {
     }
 }
 
-/// The smoothers of pf-smooth, attached to the generic filter: the joint (path-space) and
-/// fixed-lag estimators keep their caches in buffers sized at the first step.
+/// The smoothers of pf-smooth: the joint (path-space) and fixed-lag estimators on the batch
+/// filter (their sums and register are the model's columns, the frozen terms' buffers are
+/// sized in `on_start`), and forward-only smoothing on the generic filter (its buffers
+/// sized at the first step).
 #[test]
 fn smoothers_keep_allocation_out() {
     let ys = observations(STEPS + 2);
@@ -253,26 +256,30 @@ fn smoothers_keep_allocation_out() {
     let theta = Theta::paper_start();
     let model = theta.model(y[0]).expect("valid model");
     let mut pf = ParticleFilter::bootstrap(model, FilterConfig::new(300)).expect("valid config");
-    let mut joint = PathSpace::new(stats);
-    let mut lags = [1, 7, 50].map(|delta| FixedLag::new(stats, delta).expect("valid lag"));
     // Forward-only smoothing on one thread (on the pool it takes scratch rows per task).
     let mut forward = ForwardSmoothing::new(model, stats);
-    let mut rng = stream_rng(7, 0);
-    let mut step = |pf: &mut ParticleFilter<_>, y: &Option<f64>| {
-        pf.step(None, y.as_ref(), &mut rng).expect("step runs");
-        let view = pf.view().expect("a step was made");
-        joint.on_step(&view);
-        forward.on_step(&view);
-        for lag in &mut lags {
-            lag.on_step(&view);
-        }
+    let smoothed = SmoothedAr1::new(&theta, &data, 50).expect("valid model");
+    let mut lags = FixedLagTerms::new(&smoothed, &[1, 7, 50]).expect("valid lags");
+    let cfg = BatchConfig {
+        par: Par::Seq,
+        ..BatchConfig::new(300, 7)
     };
+    let mut bf = BatchFilter::new(smoothed, cfg).expect("valid config");
+    lags.on_start(300, bf.dim());
+    let mut rng = stream_rng(7, 0);
+    let mut step =
+        |pf: &mut ParticleFilter<_>, bf: &mut BatchFilter<SmoothedAr1<'_>>, y: &Option<f64>| {
+            pf.step(None, y.as_ref(), &mut rng).expect("step runs");
+            Observer::on_step(&mut forward, &pf.view().expect("a step was made"));
+            bf.step(y.as_ref()).expect("step runs");
+            lags.on_step(&bf.view().expect("a step was made"));
+        };
     for y in &ys[..2] {
-        step(&mut pf, y);
+        step(&mut pf, &mut bf, y);
     }
     let count = allocations(|| {
         for y in &ys[2..] {
-            step(&mut pf, y);
+            step(&mut pf, &mut bf, y);
         }
     });
     assert_eq!(count, 0);
