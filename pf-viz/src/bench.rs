@@ -19,6 +19,9 @@ use serde::{Deserialize, Serialize};
 use pf_core::filter::{FilterConfig, ParticleFilter};
 use pf_core::observe::AncestryRecorder;
 
+use pf_homotopy::experiments::bench::BearingsBench;
+use pf_mpf::experiments::bench::RadarBench;
+
 use crate::cli::{BenchBootstrapArgs, BenchFilterArgs, BenchGenealogyArgs, BenchModel};
 use crate::data::read_y;
 use crate::error::{Result, VizError};
@@ -218,8 +221,48 @@ pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
             };
             ("ar1", r.steps, runs)
         }
-        BenchModel::Radar | BenchModel::Bearings => {
-            return Err(invalid("this model is not on the batch engine yet".into()));
+        BenchModel::Radar => {
+            let mpf = VizError::paper("bench filter radar");
+            let mut bench = match &args.data {
+                Some(path) => {
+                    let text = std::fs::read_to_string(path).map_err(VizError::io(path))?;
+                    let mut ys = pf_mpf::experiments::bench::parse_observations_csv(&text)
+                        .map_err(|e| VizError::Data {
+                            path: path.clone(),
+                            line: None,
+                            message: e.to_string(),
+                        })?;
+                    if let Some(n) = args.steps {
+                        if n > ys.len() {
+                            return Err(invalid(format!(
+                                "--steps {n} needs {n} rows, {} has {}",
+                                path.display(),
+                                ys.len()
+                            )));
+                        }
+                        ys.truncate(n);
+                    }
+                    RadarBench::with_observations(ys, args.particles, args.seed).map_err(mpf)?
+                }
+                None => RadarBench::new(args.particles, args.steps.unwrap_or(100), args.seed)
+                    .map_err(mpf)?,
+            };
+            let steps = bench.observations().len();
+            let runs = time_runs(args.threads, args.repeat, || bench.run().map_err(mpf))?;
+            ("radar", steps, runs)
+        }
+        BenchModel::Bearings => {
+            if args.data.is_some() {
+                return Err(invalid(
+                    "--data is for ar1 and radar; bearings simulates Morelande et al.'s scenario"
+                        .into(),
+                ));
+            }
+            let hom = VizError::paper("bench filter bearings");
+            let steps = args.steps.unwrap_or(40);
+            let mut bench = BearingsBench::new(args.particles, steps, args.seed).map_err(hom)?;
+            let runs = time_runs(args.threads, args.repeat, || bench.run().map_err(hom))?;
+            ("bearings", steps, runs)
         }
     };
     Ok(FilterBenchResult {
