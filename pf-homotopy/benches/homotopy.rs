@@ -36,15 +36,19 @@ fn corrections(c: &mut Criterion) {
     }
 }
 
-/// The PF of Section 4 with N = 1000 over the default scenario's realisation from seed 1
-/// (its 40 bearings, means included): the proposal's sampling and density per particle.
+/// The PF of Section 4 over the default scenario's realisation from seed 1 (its 40
+/// bearings, means included) on the batch filter, N = 10³ and 10⁵.
 fn particle_filter(c: &mut Criterion) {
     let sc = ScenarioConfig::default();
     let real = sc.simulate(&mut stream_rng(1, 0)).expect("valid scenario");
-    let mut rng = stream_rng(2, 0);
-    c.bench_function("pf/N=1000", |b| {
-        b.iter(|| pf::run(&sc, 1000, &real, &mut rng).expect("filter runs"))
-    });
+    let mut group = c.benchmark_group("pf");
+    group.sample_size(10);
+    for n in [1000, 100_000] {
+        group.bench_function(format!("N={n}"), |b| {
+            b.iter(|| pf::run(&sc, n, &real, 2).expect("filter runs"))
+        });
+    }
+    group.finish();
 }
 
 criterion_group!(benches, corrections, particle_filter);

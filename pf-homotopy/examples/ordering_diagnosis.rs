@@ -16,6 +16,7 @@ use pf_homotopy::filters::{FilterSettings, ohf_tracker, pf, ukf_lpc};
 use pf_homotopy::model::ScenarioConfig;
 use pf_homotopy::ohf::OhfConfig;
 use pf_homotopy::prior::gaussian_prior;
+use rand::RngExt;
 
 fn main() -> Result<(), HomotopyError> {
     let args: Vec<f64> = std::env::args()
@@ -45,7 +46,7 @@ fn main() -> Result<(), HomotopyError> {
             ohf_tracker::run(&sc, &OhfConfig::direct(), &set.grid, &real)?,
             ohf_tracker::run(&sc, &set.ohf, &set.grid, &real)?,
             ohf_tracker::run(&sc, &set.aohf, &set.grid, &real)?,
-            pf::run(&sc, 10_000, &real, rng)?,
+            pf::run(&sc, 10_000, &real, rng.random())?,
         ];
         Ok::<_, HomotopyError>(
             est.iter()

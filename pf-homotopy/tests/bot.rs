@@ -1,4 +1,4 @@
-//! Checks of the BOT instance: polar-grid quadrature, PF importance weights, UKF-LPC against
+//! Checks of the BOT instance: polar-grid quadrature, UKF-LPC against
 //! a Cartesian UKF, observability of the scenario, validation and the CLI JSON shapes.
 
 use nalgebra::DMatrix;
@@ -6,9 +6,7 @@ use nalgebra::{Matrix2, Matrix4, Vector2, Vector4};
 use pf_core::geometry::wrap_angle;
 use pf_core::mc::stream_rng;
 use pf_core::params::ParamError;
-use pf_core::{Proposal, StateSpaceModel, StepAt, TransitionDensity};
 use pf_homotopy::HomotopyError;
-use pf_homotopy::filters::pf::{BotModel, LinearisedOptimal};
 use pf_homotopy::filters::ukf_lpc::{CartesianUkf, UkfLpc};
 use pf_homotopy::model::ScenarioConfig;
 use pf_homotopy::model::bearing;
@@ -103,44 +101,6 @@ fn closed_form_fisher_matches_quadrature_of_eq_25_at_lambda_zero() {
                 f[(i, j)]
             );
         }
-    }
-}
-
-#[test]
-fn linearised_optimal_weights_equal_the_predictive_density() {
-    // When h is linear over the proposal's spread, the linearised optimal density is the
-    // optimal one and g·f/q = p(y_k | x_{k−1}) = N(y; h(F x_{k−1}), H Q Hᵀ + σ²) for every
-    // draw. Here the spread is √Q ≈ 0.06 m at 5 km: the curvature term of h is
-    // ~(0.3 m / 5 km)² ≈ 4e-9 rad, which moves log w by ≲ |e|·4e-9/σ² ≈ 1e-5; 1e-4 bounds
-    // it. The target sits on the ±π cut, so the weights are right only if residuals wrap.
-    let sc = ScenarioConfig::default();
-    let model = BotModel::new(&sc, vec![[0.0, 0.0]; 3], 0.0).unwrap();
-    let x_prev = Vector4::new(-5000.0, 0.5, -10.0, 3.0);
-    let xb = sc.f() * x_prev;
-    let y = wrap_angle(bearing([xb[0], xb[1]], [0.0, 0.0]) + 0.015);
-    let r2 = xb[0] * xb[0] + xb[1] * xb[1];
-    let h = nalgebra::RowVector4::new(-xb[1] / r2, xb[0] / r2, 0.0, 0.0);
-    let s = (h * sc.q_matrix() * h.transpose())[(0, 0)] + sc.sigma().powi(2);
-    let e = wrap_angle(y - bearing([xb[0], xb[1]], [0.0, 0.0]));
-    let want = -0.5 * ((2.0 * std::f64::consts::PI * s).ln() + e * e / s);
-    let mut rng = stream_rng(3, 0);
-    let at = StepAt {
-        t: 1,
-        u: None,
-        y: Some(&y),
-    };
-    let mut x = Vector4::zeros();
-    for _ in 0..200 {
-        let log_q = LinearisedOptimal.sample(&model, at, &x_prev, &mut x, &mut rng);
-        // The density returned with the draw is the density at the draw.
-        assert_eq!(
-            log_q,
-            LinearisedOptimal.log_density(&model, at, &x_prev, &x)
-        );
-        let lw = model.log_likelihood(1, &x, &y)
-            + model.log_transition_density(1, &x_prev, &x, None)
-            - log_q;
-        assert!((lw - want).abs() < 1e-4, "{lw} vs {want}");
     }
 }
 

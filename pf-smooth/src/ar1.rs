@@ -183,6 +183,34 @@ impl AdditiveFunctional<f64> for Ar1Statistics<'_> {
         out[2] += x * x;
         out[3] += e * e;
     }
+
+    /// `Σ_j β_j s(x_j, x) = (Σ β_j x_j², x Σ β_j x_j, x² Σ β_j, (Y_k − x)² Σ β_j)`: three
+    /// sums over `j` instead of `N` terms of four components (`x_j` is finite, so a zero
+    /// `β_j` adds nothing, as if skipped).
+    #[inline]
+    fn add_weighted_increments(
+        &self,
+        k: usize,
+        x_prev: &[f64],
+        beta: &[f64],
+        x: &f64,
+        _scratch: &mut [f64],
+        out: &mut [f64],
+    ) {
+        let y = self.y.get(k).copied().unwrap_or(f64::NAN);
+        let (mut sb, mut s1, mut s2) = (0.0, 0.0, 0.0);
+        for (&b, &xj) in beta.iter().zip(x_prev) {
+            let bx = b * xj;
+            sb += b;
+            s1 += bx;
+            s2 += bx * xj;
+        }
+        let e = y - x;
+        out[0] += s2;
+        out[1] += x * s1;
+        out[2] += x * x * sb;
+        out[3] += e * e * sb;
+    }
 }
 
 /// Estimates of `τ_{n,1}, …, τ_{n,4}` for `Y_{0:n}`.
@@ -315,6 +343,27 @@ mod tests {
             degenerate.m_step(),
             Err(SmoothError::DegenerateUpdate { .. })
         ));
+    }
+
+    /// The closed form of `Σ_j β_j s(x_j, x)` is the sum of the terms.
+    #[test]
+    fn weighted_increments_in_closed_form_are_the_sum_of_the_terms() {
+        let data = Ar1Data::new(vec![0.3, -1.2, 0.8]).unwrap();
+        let stats = Ar1Statistics::new(&data);
+        let (xs, beta, x) = ([0.5, -2.0, 1.5, 0.0], [0.25, 0.0, 0.6, 0.15], -0.7);
+        let mut direct = [1.0, 2.0, 3.0, 4.0];
+        for (xj, b) in xs.iter().zip(beta) {
+            let mut s = [0.0; 4];
+            stats.increment(2, xj, &x, &mut s);
+            for (d, v) in direct.iter_mut().zip(s) {
+                *d += b * v;
+            }
+        }
+        let mut closed = [1.0, 2.0, 3.0, 4.0];
+        stats.add_weighted_increments(2, &xs, &beta, &x, &mut [0.0; 16], &mut closed);
+        for (a, b) in closed.iter().zip(direct) {
+            assert!((a - b).abs() < 1e-14, "{closed:?} vs {direct:?}");
+        }
     }
 
     #[test]

@@ -4,11 +4,11 @@
 //! Carlo EM with a growing number of particles.
 
 use crate::ar1::{Ar1Data, Ar1Statistics, SuffStats, Theta};
+use crate::batch::{FixedLagTerms, SmoothedAr1};
 use crate::error::{Result, SmoothError};
-use crate::fixed_lag::FixedLag;
 use crate::forward::ForwardSmoothing;
-use crate::path_space::PathSpace;
-use pf_core::filter::{FilterConfig, ParticleFilter, ResamplePolicy};
+use pf_core::filter::{BatchConfig, BatchFilter, FilterConfig, ResamplePolicy};
+use pf_core::mc::Par;
 use pf_core::params::{ParamError, at_least_one};
 use pf_core::resample::Resampler;
 use rand::Rng;
@@ -63,9 +63,11 @@ pub fn particle_statistics<R: Rng + ?Sized>(
     Ok((run.joint, run.fixed_lag))
 }
 
-/// One run of the bootstrap filter at `θ` on `data`, feeding the joint estimator, the
-/// fixed-lag one if `lag` is given, and forward-only smoothing if `forward` (on the calling
-/// thread: replications are what runs in parallel).
+/// One run of the bootstrap filter at `θ` on `data` (on pf-core's batch engine, with
+/// [`SmoothedAr1`]), feeding the joint estimator, the fixed-lag one if `lag` is given, and
+/// forward-only smoothing if `forward`. The filter runs on the calling thread
+/// ([`Par::Seq`]): replications are what runs in parallel. Its chunk streams come from one
+/// `u64` drawn from `rng`.
 ///
 /// # Errors
 /// Bad `θ`, `N = 0`, `δ = 0`, a filter failure or a non-finite estimate.
@@ -77,28 +79,78 @@ pub fn run_statistics<R: Rng + ?Sized>(
     forward: bool,
     rng: &mut R,
 ) -> Result<RunStatistics> {
-    let model = theta.model(data.y()[0])?;
-    let stats = Ar1Statistics::new(data);
-    let mut pf = ParticleFilter::bootstrap(model, filter)?;
-    let ys = data.filter_input();
-    let n = data.n();
-    let mut joint = PathSpace::new(stats);
-    // A lag beyond n freezes nothing, so cap it: the cache stays O(N·n) at most.
-    let mut fixed = lag
-        .map(|delta| FixedLag::new(stats, delta.min(n + 1)))
-        .transpose()?;
-    let mut smoother = forward.then(|| ForwardSmoothing::new(model, stats));
-    pf.run(
-        &ys,
-        None,
-        rng,
-        &mut (&mut joint, fixed.as_mut(), smoother.as_mut()),
-    )?;
-    let suff = |v: Vec<f64>| SuffStats::from_slice(n, &v);
+    let lags: Vec<usize> = lag.into_iter().collect();
+    let run = lag_statistics(data, theta, filter, &lags, forward, rng)?;
     Ok(RunStatistics {
-        joint: suff(joint.estimate()?)?,
-        fixed_lag: fixed.map(|f| f.estimate().and_then(suff)).transpose()?,
-        forward: smoother.map(|f| f.estimate().and_then(suff)).transpose()?,
+        joint: run.joint,
+        fixed_lag: run.fixed_lag.first().copied(),
+        forward: run.forward,
+    })
+}
+
+/// The estimates of `τ_{n,1…4}` that one filter run gives for several lags.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LagStatistics {
+    /// The path-space ("joint") estimate, eqs. (6)–(7).
+    pub joint: SuffStats,
+    /// The fixed-lag estimate of each lag, in the order given.
+    pub fixed_lag: Vec<SuffStats>,
+    /// The forward-only smoothing estimate, if asked for.
+    pub forward: Option<SuffStats>,
+}
+
+/// The batch filter's configuration for `filter` on the calling thread, its streams from
+/// `seed`.
+pub fn batch_config(filter: FilterConfig, seed: u64) -> BatchConfig {
+    BatchConfig {
+        resampler: filter.resampler,
+        policy: filter.policy,
+        par: Par::Seq,
+        ..BatchConfig::new(filter.n_particles, seed)
+    }
+}
+
+/// [`run_statistics`] with any number of lags: one run of the batch filter whose model
+/// carries a register of the largest lag within the data ([`SmoothedAr1`]), every lag's
+/// estimate read from it ([`FixedLagTerms`]). A lag beyond `n` freezes nothing and gives
+/// the joint estimate.
+///
+/// # Errors
+/// As [`run_statistics`].
+pub fn lag_statistics<R: Rng + ?Sized>(
+    data: &Ar1Data,
+    theta: &Theta,
+    filter: FilterConfig,
+    lags: &[usize],
+    forward: bool,
+    rng: &mut R,
+) -> Result<LagStatistics> {
+    let n = data.n();
+    for &d in lags {
+        at_least_one("lag", d)?;
+    }
+    let register = lags.iter().copied().filter(|&d| d <= n).max().unwrap_or(0);
+    let model = SmoothedAr1::new(theta, data, register)?;
+    let mut terms = FixedLagTerms::new(&model, lags)?;
+    let mut smoother =
+        forward.then(|| ForwardSmoothing::new(*model.model(), Ar1Statistics::new(data)));
+    let mut pf = BatchFilter::new(model, batch_config(filter, rng.next_u64()))?;
+    pf.run_observed(
+        None,
+        &data.filter_input(),
+        &mut (&mut terms, smoother.as_mut()),
+    )?;
+    let view = pf.view().ok_or(SmoothError::NoSteps {
+        what: "batch filter",
+    })?;
+    let (joint, fixed_lag) = terms.estimates(&view)?;
+    let forward = smoother
+        .map(|f| f.estimate().and_then(|v| SuffStats::from_slice(n, &v)))
+        .transpose()?;
+    Ok(LagStatistics {
+        joint,
+        fixed_lag,
+        forward,
     })
 }
 

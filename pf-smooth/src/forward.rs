@@ -23,9 +23,10 @@
 //!   Bayesian filtering", *Statistics and Computing* 10, 2000 (FFBSm).
 
 use crate::error::Result;
+use crate::estimate::{copy_states, weighted_estimate};
 use crate::functional::AdditiveFunctional;
-use crate::path_space::{copy_states, weighted_estimate};
 use pf_core::TransitionDensity;
+use pf_core::filter::{BatchObserver, BatchView};
 use pf_core::mc::Par;
 use pf_core::observe::{Observer, StepView};
 use rayon::prelude::*;
@@ -55,7 +56,19 @@ pub struct ForwardSmoothing<M: TransitionDensity, F> {
     weights: Vec<f64>,
     /// Scratch of [`Par::Seq`]: backward log-weights, weights and one increment.
     scratch: Row,
+    /// A batch filter's step, copied out of its view.
+    batch: BatchStep,
     t: Option<usize>,
+}
+
+/// A batch filter's particles (column 0), log-weights and weights, and the first error
+/// met copying them.
+#[derive(Debug, Clone, Default)]
+struct BatchStep {
+    x: Vec<f64>,
+    log_w: Vec<f64>,
+    w: Vec<f64>,
+    error: Option<pf_core::CoreError>,
 }
 
 /// The scratch of one row `T_k^i`: backward log-weights and weights, and every
@@ -102,6 +115,7 @@ where
             tk_next: Vec::new(),
             weights: Vec::new(),
             scratch: Row::default(),
+            batch: BatchStep::default(),
             t: None,
         }
     }
@@ -173,56 +187,57 @@ fn backward_row<M, F>(
         row.fill(f64::NAN);
         return;
     }
-    // Every increment first, then one pass: reading each one back right after its scalar
-    // stores stalled on store forwarding (a third of the time, perf).
-    scratch.s.fill(0.0);
-    for ((&b, xj), sj) in scratch
-        .beta
-        .iter()
-        .zip(prev)
-        .zip(scratch.s.chunks_exact_mut(d))
-    {
-        if b != 0.0 {
-            f.increment(k, xj, x, sj);
-        }
-    }
-    // Four components at a time in a local accumulator: summed in the row itself, each
-    // `j` waited on the row's previous store.
+    // Σ_j β^{ij} T_{k−1}^j, four components at a time in a local accumulator (summed in
+    // the row itself, each `j` waited on the row's previous store).
+    // A zero weight is skipped, not multiplied: `T_{k−1}^j` may be NaN (no backward weight
+    // at an earlier step), and `0 · NaN` would spread it to every row.
     for (c0, out) in (0..d).step_by(4).zip(row.chunks_mut(4)) {
         let w = out.len();
         let mut acc = [0.0f64; 4];
-        for ((&b, tj), sj) in scratch
-            .beta
-            .iter()
-            .zip(t_prev.chunks_exact(d))
-            .zip(scratch.s.chunks_exact(d))
-        {
-            // A zero weight is skipped, not multiplied: `T_{k−1}^j` may be NaN (no backward
-            // weight at an earlier step), and `0 · NaN` would spread it to every row.
-            if b != 0.0 {
-                for (l, a) in acc[..w].iter_mut().enumerate() {
-                    *a += b * (tj[c0 + l] + sj[c0 + l]);
+        if w == 4 {
+            // The common case in registers (a slice of run-time length kept `acc` on the
+            // stack, a third of the row's time).
+            let [mut a0, mut a1, mut a2, mut a3] = acc;
+            for (&b, tj) in scratch.beta.iter().zip(t_prev.chunks_exact(d)) {
+                if b != 0.0 {
+                    let t4 = &tj[c0..c0 + 4];
+                    a0 += b * t4[0];
+                    a1 += b * t4[1];
+                    a2 += b * t4[2];
+                    a3 += b * t4[3];
+                }
+            }
+            acc = [a0, a1, a2, a3];
+        } else {
+            for (&b, tj) in scratch.beta.iter().zip(t_prev.chunks_exact(d)) {
+                if b != 0.0 {
+                    for (l, a) in acc[..w].iter_mut().enumerate() {
+                        *a += b * tj[c0 + l];
+                    }
                 }
             }
         }
         out.copy_from_slice(&acc[..w]);
     }
+    // + Σ_j β^{ij} s_{k−1}(ξ_{k−1}^j, x), in the functional's closed form where it has one.
+    f.add_weighted_increments(k, prev, &scratch.beta, x, &mut scratch.s, row);
 }
 
-impl<M, F> Observer<M::State> for ForwardSmoothing<M, F>
+impl<M, F> ForwardSmoothing<M, F>
 where
     M: TransitionDensity<Input = ()>,
     M::State: Clone,
     F: AdditiveFunctional<M::State>,
 {
-    fn on_step(&mut self, view: &StepView<'_, M::State>) {
-        let n = view.particles.len();
+    /// One step of the recursion: the particles `ξ_k^i` of step `k`, their normalised
+    /// log-weights and weights.
+    fn update(&mut self, k: usize, particles: &[M::State], log_weights: &[f64], weights: &[f64]) {
+        let n = particles.len();
         let d = self.d;
-        let k = view.report.t;
         if k == 0 || self.t.is_none() {
             self.tk.clear();
             self.tk.resize(n * d, 0.0);
-            for (x0, t0) in view.particles.iter().zip(self.tk.chunks_exact_mut(d)) {
+            for (x0, t0) in particles.iter().zip(self.tk.chunks_exact_mut(d)) {
                 self.f.initial(x0, t0);
             }
         } else {
@@ -233,7 +248,7 @@ where
             match self.par {
                 Par::Seq => {
                     self.scratch.resize(m, d);
-                    for (x, row) in view.particles.iter().zip(self.tk_next.chunks_exact_mut(d)) {
+                    for (x, row) in particles.iter().zip(self.tk_next.chunks_exact_mut(d)) {
                         let s = &mut self.scratch;
                         backward_row(model, f, k, prev, log_w_prev, t_prev, x, s, row);
                     }
@@ -241,7 +256,7 @@ where
                 Par::Rayon => self
                     .tk_next
                     .par_chunks_exact_mut(d)
-                    .zip(view.particles.par_iter())
+                    .zip(particles.par_iter())
                     .for_each_init(
                         || Row::sized(m, d),
                         |s, (row, x)| {
@@ -251,12 +266,64 @@ where
             }
             std::mem::swap(&mut self.tk, &mut self.tk_next);
         }
-        copy_states(&mut self.prev, view.particles);
+        copy_states(&mut self.prev, particles);
         self.log_w_prev.clear();
-        self.log_w_prev.extend_from_slice(view.log_weights);
+        self.log_w_prev.extend_from_slice(log_weights);
         self.weights.clear();
-        self.weights.extend_from_slice(view.weights);
+        self.weights.extend_from_slice(weights);
         self.t = Some(k);
+    }
+}
+
+impl<M, F> Observer<M::State> for ForwardSmoothing<M, F>
+where
+    M: TransitionDensity<Input = ()>,
+    M::State: Clone,
+    F: AdditiveFunctional<M::State>,
+{
+    fn on_step(&mut self, view: &StepView<'_, M::State>) {
+        self.update(
+            view.report.t,
+            view.particles,
+            view.log_weights,
+            view.weights,
+        );
+    }
+}
+
+/// On the batch filter, for a scalar state in column 0 (such as
+/// [`SmoothedAr1`](crate::batch::SmoothedAr1)'s): the particles and weights are copied out
+/// of each step's view into buffers kept between steps.
+impl<M, F> BatchObserver for ForwardSmoothing<M, F>
+where
+    M: TransitionDensity<Input = (), State = f64>,
+    F: AdditiveFunctional<f64>,
+{
+    fn on_step(&mut self, view: &BatchView<'_>) {
+        let mut b = std::mem::take(&mut self.batch);
+        let n = view.n();
+        b.x.resize(n, 0.0);
+        b.w.resize(n, 0.0);
+        b.log_w.resize(n, 0.0);
+        let copied = view
+            .column_into(0, &mut b.x)
+            .and_then(|()| view.weights_into(&mut b.w));
+        match copied {
+            Ok(()) => {
+                for (l, w) in b.log_w.iter_mut().zip(&b.w) {
+                    *l = w.ln();
+                }
+                self.update(view.report().t, &b.x, &b.log_w, &b.w);
+            }
+            Err(e) => {
+                b.error.get_or_insert(e);
+            }
+        }
+        self.batch = b;
+    }
+
+    fn on_finish(&mut self) -> pf_core::Result<()> {
+        self.batch.error.take().map_or(Ok(()), Err)
     }
 }
 
@@ -327,13 +394,16 @@ mod tests {
             resampled: false,
         };
         let a: Vec<usize> = (0..x.len()).collect();
-        fs.on_step(&StepView {
-            report,
-            particles: x,
-            log_weights: &log_w,
-            weights: w,
-            ancestors: &a,
-        });
+        Observer::on_step(
+            fs,
+            &StepView {
+                report,
+                particles: x,
+                log_weights: &log_w,
+                weights: w,
+                ancestors: &a,
+            },
+        );
     }
 
     /// A particle no earlier particle can reach has no backward weight: while it carries

@@ -20,6 +20,46 @@ pub trait AdditiveFunctional<S>: Sync {
 
     /// `out += s_{k−1}(x_{k−1}, x_k)`, the term of step `k ≥ 1`.
     fn increment(&self, k: usize, x_prev: &S, x: &S, out: &mut [f64]);
+
+    /// `out += Σ_j β_j s_{k−1}(x_prev[j], x)` over the `j` with `β_j ≠ 0`: the inner sum of
+    /// forward-only smoothing ([`forward`](crate::forward)), for backward weights `β` that
+    /// sum to 1. `scratch` holds `x_prev.len() · dim` values.
+    ///
+    /// By default each term is evaluated into `scratch`, then they are summed (reading
+    /// each one back right after its scalar stores stalled on store forwarding, a third of
+    /// the time). A functional with a closed form overrides it, as
+    /// [`Ar1Statistics`](crate::Ar1Statistics) does.
+    fn add_weighted_increments(
+        &self,
+        k: usize,
+        x_prev: &[S],
+        beta: &[f64],
+        x: &S,
+        scratch: &mut [f64],
+        out: &mut [f64],
+    ) {
+        let d = out.len();
+        scratch.fill(0.0);
+        for ((&b, xj), sj) in beta.iter().zip(x_prev).zip(scratch.chunks_exact_mut(d)) {
+            if b != 0.0 {
+                self.increment(k, xj, x, sj);
+            }
+        }
+        // Four components at a time in a local accumulator: summed in `out` itself, each
+        // `j` waited on the previous store.
+        for (c0, out) in (0..d).step_by(4).zip(out.chunks_mut(4)) {
+            let w = out.len();
+            let mut acc = [0.0f64; 4];
+            for (&b, sj) in beta.iter().zip(scratch.chunks_exact(d)) {
+                for (l, a) in acc[..w].iter_mut().enumerate() {
+                    *a += b * sj[c0 + l];
+                }
+            }
+            for (o, a) in out.iter_mut().zip(acc) {
+                *o += a;
+            }
+        }
+    }
 }
 
 impl<S, F: AdditiveFunctional<S> + ?Sized> AdditiveFunctional<S> for &F {
@@ -31,5 +71,16 @@ impl<S, F: AdditiveFunctional<S> + ?Sized> AdditiveFunctional<S> for &F {
     }
     fn increment(&self, k: usize, x_prev: &S, x: &S, out: &mut [f64]) {
         (**self).increment(k, x_prev, x, out)
+    }
+    fn add_weighted_increments(
+        &self,
+        k: usize,
+        x_prev: &[S],
+        beta: &[f64],
+        x: &S,
+        scratch: &mut [f64],
+        out: &mut [f64],
+    ) {
+        (**self).add_weighted_increments(k, x_prev, beta, x, scratch, out)
     }
 }

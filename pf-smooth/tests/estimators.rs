@@ -159,57 +159,6 @@ fn the_fisher_identity_score_agrees_with_the_exact_gradient() {
     }
 }
 
-#[test]
-fn without_resampling_the_joint_estimator_is_the_importance_sampling_formula() {
-    use pf_core::filter::{FilterConfig, ParticleFilter, ResamplePolicy};
-    use pf_core::observe::CloudRecorder;
-    use pf_core::resample::Resampler;
-    use pf_smooth::{AdditiveFunctional, Ar1Statistics, PathSpace};
-
-    let y = simulated(30, 9);
-    let data = Ar1Data::from_slice(&y).unwrap();
-    let theta = Theta::from_std(0.9, 0.5, 1.5).unwrap();
-    let stats = Ar1Statistics::new(&data);
-    let mut joint = PathSpace::new(stats);
-    let mut clouds = CloudRecorder::new();
-    let cfg = FilterConfig {
-        n_particles: 64,
-        resampler: Resampler::Systematic,
-        policy: ResamplePolicy::Never,
-    };
-    let mut pf = ParticleFilter::bootstrap(theta.model(y[0]).unwrap(), cfg).unwrap();
-    pf.run(
-        &data.filter_input(),
-        None,
-        &mut stream_rng(10, 0),
-        &mut (&mut joint, &mut clouds),
-    )
-    .unwrap();
-    // Importance sampling over whole paths: Σ_i W_n^i Σ_k s_k(ξ_{k−1}^i, ξ_k^i), each
-    // particle following its own path (no ancestors to trace).
-    let paths = clouds.positions();
-    let w = &clouds.clouds.last().unwrap().weights;
-    let mut direct = [0.0; 4];
-    for (i, &wi) in w.iter().enumerate() {
-        let mut s = [0.0; 4];
-        stats.initial(&paths[0][i], &mut s);
-        for k in 1..paths.len() {
-            stats.increment(k, &paths[k - 1][i], &paths[k][i], &mut s);
-        }
-        for (d, v) in direct.iter_mut().zip(s) {
-            *d += wi * v;
-        }
-    }
-    let est = joint.estimate().unwrap();
-    for (j, (a, b)) in est.iter().zip(direct).enumerate() {
-        assert!(
-            (a - b).abs() <= 1e-10 * b.abs().max(1.0),
-            "τ_{}: {a} vs {b}",
-            j + 1
-        );
-    }
-}
-
 /// Simulated observations are the model's draw on the stream `(seed, stream)`: the same
 /// numbers as given ones, and so the same experiment.
 #[test]

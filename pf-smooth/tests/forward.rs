@@ -9,7 +9,7 @@ use pf_core::observe::CloudRecorder;
 use pf_core::resample::Resampler;
 use pf_smooth::em::paper_filter_config;
 use pf_smooth::exact::exact_statistics;
-use pf_smooth::{AdditiveFunctional, Ar1Data, Ar1Statistics, ForwardSmoothing, PathSpace, Theta};
+use pf_smooth::{AdditiveFunctional, Ar1Data, Ar1Statistics, ForwardSmoothing, Theta};
 
 /// Section 5's data, `n` steps, from stream `s`.
 fn data(n: usize, s: u64) -> Ar1Data {
@@ -139,14 +139,12 @@ fn forward_smoothing_converges_to_the_exact_statistics() {
 fn forward_smoothing_does_not_degenerate_like_the_path_space_estimator() {
     let d = data(1000, 3);
     let theta = Theta::paper_start();
-    let stats = Ar1Statistics::new(&d);
     let runs = replicate(5, 20, Par::Rayon, |_, rng| {
-        let model = theta.model(d.y()[0]).unwrap();
-        let (mut fs, mut joint) = (ForwardSmoothing::new(model, stats), PathSpace::new(stats));
-        let mut pf = ParticleFilter::bootstrap(model, paper_filter_config(100)).unwrap();
-        pf.run(&d.filter_input(), None, rng, &mut (&mut fs, &mut joint))
-            .unwrap();
-        (fs.estimate().unwrap(), joint.estimate().unwrap())
+        // One batch run feeds both.
+        let run =
+            pf_smooth::em::run_statistics(&d, &theta, paper_filter_config(100), None, true, rng)
+                .unwrap();
+        (run.forward.unwrap().tau, run.joint.tau)
     });
     let sd = |v: Vec<f64>| mean_and_se(&v).1 * (v.len() as f64).sqrt();
     for c in 0..4 {

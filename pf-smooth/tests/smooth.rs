@@ -1,17 +1,14 @@
 //! The tests: exact references, convergence, the fixed-lag claim, the score and the
-//! estimators against their direct formulas.
+//! estimators' means against the exact statistics (their direct formulas: `tests/batch.rs`).
 
 use nalgebra::DVector;
-use pf_core::filter::{FilterConfig, ParticleFilter, ResamplePolicy};
 use pf_core::kalman::LinearGaussian;
 use pf_core::mc::{Par, mean_and_se, replicate, stream_rng};
 use pf_core::models::NoisyAr1;
-use pf_core::observe::{CloudRecorder, GenealogyRecorder};
-use pf_core::resample::Resampler;
 use pf_core::testing::joint_gaussian_posterior;
 use pf_smooth::em::{paper_filter_config, particle_statistics};
 use pf_smooth::exact::{exact_log_likelihood, exact_score, exact_statistics};
-use pf_smooth::{AdditiveFunctional, Ar1Data, Ar1Statistics, FixedLag, PathSpace, Theta};
+use pf_smooth::{Ar1Data, Theta};
 
 /// Section 5's data, `n` steps, from stream `s`.
 fn data(n: usize, s: u64) -> Ar1Data {
@@ -167,92 +164,4 @@ fn particle_score_agrees_with_the_exact_gradient() {
             "{name}: particle {m} ± {se}, exact {e}"
         );
     }
-}
-
-/// Run a filter with `policy`, returning the joint and fixed-lag estimates and the same two
-/// computed directly from the recorded clouds and genealogy (eqs. (6) and (9)).
-fn against_direct(policy: ResamplePolicy, delta: usize) {
-    let d = data(30, 5);
-    let theta = Theta::paper_start();
-    let stats = Ar1Statistics::new(&d);
-    let cfg = FilterConfig {
-        n_particles: 40,
-        resampler: Resampler::Systematic,
-        policy,
-    };
-    let mut pf = ParticleFilter::bootstrap(theta.model(d.y()[0]).unwrap(), cfg).unwrap();
-    let mut joint = PathSpace::new(stats);
-    let mut lagged = FixedLag::new(stats, delta).unwrap();
-    let mut rec = (CloudRecorder::new(), GenealogyRecorder::new());
-    pf.run(
-        &d.filter_input(),
-        None,
-        &mut stream_rng(11, 0),
-        &mut (&mut joint, &mut lagged, &mut rec),
-    )
-    .unwrap();
-    let (clouds, g) = rec;
-    let g = g.genealogy();
-    let n = d.n();
-    // s along the lineage of particle i of step m, for the term of step j (1 ≤ j ≤ m).
-    let term = |m: usize, i: usize, j: usize, out: &mut [f64]| {
-        let line = g.lineage_at(m, i).unwrap();
-        let x = |k: usize| clouds.clouds[k].particles[line[k]];
-        if j == 1 {
-            stats.initial(&x(0), out);
-        }
-        stats.increment(j, &x(j - 1), &x(j), out);
-    };
-    let mut direct_joint = [0.0; 4];
-    let mut direct_lag = [0.0; 4];
-    for i in 0..40 {
-        let mut s = [0.0; 4];
-        for j in 1..=n {
-            term(n, i, j, &mut s);
-        }
-        let w = clouds.clouds[n].weights[i];
-        for c in 0..4 {
-            direct_joint[c] += w * s[c];
-        }
-    }
-    for j in 1..=n {
-        let m = (j + delta - 1).min(n);
-        for i in 0..40 {
-            let mut s = [0.0; 4];
-            term(m, i, j, &mut s);
-            let w = clouds.clouds[m].weights[i];
-            for c in 0..4 {
-                direct_lag[c] += w * s[c];
-            }
-        }
-    }
-    let close = |a: &[f64], b: &[f64]| {
-        a.iter()
-            .zip(b)
-            .all(|(x, y)| (x - y).abs() < 1e-9 * y.abs().max(1.0))
-    };
-    let (je, le) = (joint.estimate().unwrap(), lagged.estimate().unwrap());
-    assert!(
-        close(&je, &direct_joint),
-        "{policy:?}: {je:?} vs {direct_joint:?}"
-    );
-    assert!(
-        close(&le, &direct_lag),
-        "{policy:?}, δ = {delta}: {le:?} vs {direct_lag:?}"
-    );
-}
-
-#[test]
-fn without_resampling_the_estimators_are_the_importance_sampling_formulas() {
-    // No resampling: every lineage is the particle's own path, and (6) is the
-    // self-normalised importance-sampling estimate Σ_i W_n^i S(ξ_{0:n}^i).
-    against_direct(ResamplePolicy::Never, 5);
-}
-
-#[test]
-fn gamma_follows_the_ancestors_under_any_resampling_policy() {
-    use pf_core::filter::EssThreshold;
-    against_direct(ResamplePolicy::EssBelow(EssThreshold::Fraction(0.5)), 4);
-    against_direct(ResamplePolicy::Always, 7);
-    against_direct(ResamplePolicy::Always, 1);
 }

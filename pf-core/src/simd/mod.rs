@@ -19,6 +19,7 @@
 pub(crate) mod avx512;
 mod lanes;
 pub mod math;
+pub mod special;
 mod tables;
 
 pub use lanes::{LANES, LaneRng};

@@ -15,6 +15,7 @@
 //! | [`tracks()`] | one realisation tracked by every filter (for recordings) |
 
 mod ablation;
+pub mod bench;
 mod ellipses;
 mod fig1;
 mod geometry;

@@ -13,7 +13,7 @@ use crate::ohf::OhfConfig;
 use crate::quadrature::PolarGridConfig;
 use pf_core::kalman::UkfParams;
 use pf_core::params::ParamError;
-use rand::Rng;
+use rand::{Rng, RngExt};
 
 /// The algorithms compared in Fig. 3.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -117,6 +117,6 @@ pub fn track<R: Rng + ?Sized>(
         Algorithm::Ohf => ohf_tracker::run(scenario, &settings.ohf, &settings.grid, realisation),
         Algorithm::Aohf => ohf_tracker::run(scenario, &settings.aohf, &settings.grid, realisation),
         Algorithm::UkfLpc => ukf_lpc::run(scenario, settings.ukf, realisation),
-        Algorithm::Pf => pf::run(scenario, settings.particles, realisation, rng),
+        Algorithm::Pf => pf::run(scenario, settings.particles, realisation, rng.random()),
     }
 }

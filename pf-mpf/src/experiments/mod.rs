@@ -19,11 +19,14 @@ mod ratio;
 mod tables;
 mod traces;
 
-pub use fig3::{Fig3Config, Fig3Result, Fig3Row, fig3};
+pub use fig3::{
+    Fig3Config, Fig3Result, Fig3Row, alg1_matrices, fig3, fig3_calibrated, fig3_with,
+    predicted_time_s,
+};
 pub use ratio::{RatioConfig, RatioCurve, RatioResult, ratio};
 pub use tables::{
-    RmseCurve, TableConfig, TableReport, TableResult, TableRow, paper_table2, paper_table3, table2,
-    table3,
+    ModelPrediction, PartitionTerms, RmseCurve, TableConfig, TableReport, TableResult, TableRow,
+    model_prediction, paper_table2, paper_table3, table2, table2_with, table3,
 };
 pub use traces::{TracesConfig, TracesResult, traces};
 

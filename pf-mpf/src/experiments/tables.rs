@@ -2,10 +2,21 @@
 //!
 //! Every partition sees the same true trajectory and, in Monte Carlo run `r`, the same
 //! measurement noise (stream `(seed, r)`), so the comparisons are paired. Times are the
-//! minimum over sequential timed runs, as the paper takes the minimum to avoid the
-//! operating system's interventions.
+//! thread's CPU time of one run ([`Stopwatch`]), the median over sequential timed runs: the
+//! paper takes the minimum of wall times to avoid the operating system's interventions,
+//! which the CPU clock leaves out by itself.
+//!
+//! Table II also carries what the calibrated EF model predicts: for each partition the `N`
+//! at which eq. (11) costs what the standard PF costs with `N_PF` (`predicted_N`), the same
+//! with the extended model [`ef_structural`], and the per-particle terms behind it, ours
+//! beside the paper's.
 
 use super::Scale;
+use crate::calibrate::{CalibrateConfig, Calibration, CalibrationReport, Stopwatch, median};
+use crate::complexity::{
+    CtCase, EfCoefficients, PerParticleTerms, ef_structural, equal_cost_particles,
+    equal_cost_particles_structural, fit_state_traffic, per_particle_terms, structural_terms,
+};
 use crate::error::{MpfError, Result};
 use crate::mpf::MpfConfig;
 use crate::radar::{Partition, RadarConfig, RadarState, run_partition};
@@ -32,6 +43,9 @@ pub struct TableConfig {
     pub partitions: Vec<Partition>,
     /// Seed.
     pub seed: u64,
+    /// The calibration behind Table II's predicted `N`.
+    #[serde(default)]
+    pub calibration: CalibrateConfig,
 }
 
 impl Default for TableConfig {
@@ -59,6 +73,10 @@ impl TableConfig {
             n_min: 10,
             partitions: Partition::paper(),
             seed: 1,
+            calibration: match scale {
+                Scale::Quick => CalibrateConfig::quick(),
+                _ => CalibrateConfig::default(),
+            },
         }
     }
 
@@ -68,6 +86,7 @@ impl TableConfig {
     /// Any part invalid; the first partition not `PPPPPP`.
     pub fn validate(&self) -> Result<()> {
         self.radar.validate()?;
+        self.calibration.validate()?;
         MpfConfig::new(self.n_pf).validate()?;
         for (name, v) in [
             ("N_MC", self.n_mc),
@@ -184,6 +203,50 @@ pub struct TableReport {
     pub reached: Vec<bool>,
     /// RMSE over time per partition.
     pub rmse_over_time: Vec<RmseCurve>,
+    /// Table II: what the calibrated EF model predicts (`None` for Table III).
+    #[serde(default)]
+    pub model: Option<ModelPrediction>,
+}
+
+/// One partition's per-particle EF, ours beside the paper's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PartitionTerms {
+    /// `PPKKKK` etc.
+    pub name: String,
+    /// PF states.
+    pub p: usize,
+    /// KF states.
+    pub k: usize,
+    /// The extended model's coefficient of `N` with this machine's `c1, c2, c3`: Table I's
+    /// flops on the radar model's nonzeros, and `c_m (p + k)`.
+    pub ours: PerParticleTerms,
+    /// The same with the paper's `c1 = 445, c2 = 487, c3 = 125` (no extension).
+    pub paper: PerParticleTerms,
+}
+
+/// What the calibrated EF model says about Table II.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelPrediction {
+    /// The calibration.
+    pub calibration: Calibration,
+    /// Per partition, the `N` with the standard PF's cost at `N_PF` under eq. (11) with the
+    /// calibration (`predicted_N` of `pf-viz mpf table2 --json`).
+    pub predicted_n: Vec<f64>,
+    /// Its central 68 % interval over the calibration's bootstrap.
+    pub predicted_n_range: Vec<(f64, f64)>,
+    /// The same under the extended model [`ef_structural`], `c_m` fitted on the standard
+    /// PF's measured time.
+    pub predicted_n_ext: Vec<f64>,
+    /// The extension's `c_m` (EF per state value per particle).
+    pub c_m: f64,
+    /// `(N − predicted_N)/predicted_N` per partition (eq. (11)).
+    pub rel_error: Vec<f64>,
+    /// `(N − predicted_N_ext)/predicted_N_ext` per partition.
+    pub rel_error_ext: Vec<f64>,
+    /// The per-particle terms of each partition, ours and the paper's.
+    pub terms: Vec<PartitionTerms>,
+    /// What the calibration fell back on, if anything.
+    pub notes: Vec<String>,
 }
 
 fn row(name: &str, n: usize, pos: f64, vel: f64, acc: f64, time_s: f64) -> TableRow {
@@ -256,23 +319,116 @@ fn monte_carlo(
 }
 
 fn time_of(cfg: &TableConfig, part: &Partition, n: usize, truth: &[RadarState]) -> Result<f64> {
-    let mut best = f64::INFINITY;
+    let mut times = Vec::with_capacity(cfg.timing_reps);
     for rep in 0..cfg.timing_reps {
         let mut rng = stream_rng(cfg.seed ^ 0x7157, rep as u64);
         let ys = cfg.radar.measure(truth, &mut rng);
-        best = best
-            .min(run_partition(part, &cfg.radar, MpfConfig::new(n), truth, &ys, &mut rng)?.time_s);
+        let watch = Stopwatch::start();
+        run_partition(part, &cfg.radar, MpfConfig::new(n), truth, &ys, &mut rng)?;
+        times.push(watch.elapsed_s());
     }
-    Ok(best)
+    Ok(median(&times))
+}
+
+/// The model's side of Table II for `partitions`, given the standard PF's measured time
+/// `target_s` (which fits the extension's `c_m`) and the measured `N` per partition.
+///
+/// # Errors
+/// A bad configuration (the radar model of a partition).
+pub fn model_prediction(
+    cfg: &TableConfig,
+    report: &CalibrationReport,
+    target_s: f64,
+    measured_n: &[usize],
+) -> Result<ModelPrediction> {
+    let cal = report.calibration;
+    let coef = cal.coefficients();
+    let structure = cfg
+        .partitions
+        .iter()
+        .map(|q| super::fig3::alg1_matrices(q, &cfg.radar))
+        .collect::<Result<Vec<_>>>()?;
+    let c_m = fit_state_traffic(
+        &ef_structural(&structure[0], &coef, 0.0),
+        6,
+        cfg.n_pf,
+        cfg.radar.n_steps,
+        target_s,
+        cal.flop_ns,
+    );
+    let n_pf = cfg.n_pf as f64;
+    let eq = |p, k, c: &EfCoefficients| {
+        if k == 0 {
+            n_pf
+        } else {
+            equal_cost_particles(CtCase::Zero, p, k, n_pf, c)
+        }
+    };
+    let pk: Vec<(usize, usize)> = cfg.partitions.iter().map(|q| (q.p(), q.k())).collect();
+    let predicted_n: Vec<f64> = pk.iter().map(|&(p, k)| eq(p, k, &coef)).collect();
+    let predicted_n_ext: Vec<f64> = structure
+        .iter()
+        .map(|m| {
+            if m.k() == 0 {
+                n_pf
+            } else {
+                equal_cost_particles_structural(&structure[0], m, n_pf, &coef, c_m)
+            }
+        })
+        .collect();
+    let rel = |pred: &[f64]| {
+        measured_n
+            .iter()
+            .zip(pred)
+            .map(|(&n, &p)| (n as f64 - p) / p)
+            .collect()
+    };
+    Ok(ModelPrediction {
+        calibration: cal,
+        predicted_n_range: pk
+            .iter()
+            .map(|&(p, k)| report.interval(|c| eq(p, k, &c.coefficients())))
+            .collect(),
+        rel_error: rel(&predicted_n),
+        rel_error_ext: rel(&predicted_n_ext),
+        predicted_n,
+        predicted_n_ext,
+        c_m,
+        terms: cfg
+            .partitions
+            .iter()
+            .zip(&structure)
+            .map(|(q, m)| PartitionTerms {
+                name: q.name(),
+                p: q.p(),
+                k: q.k(),
+                ours: structural_terms(m, &coef, c_m),
+                paper: per_particle_terms(q.p(), q.k(), &EfCoefficients::default(), 0.0),
+            })
+            .collect(),
+        notes: report.notes.clone(),
+    })
 }
 
 /// Table II: the PF's time with `N_PF` particles is the target; for each MPF partition the
 /// `N` whose time matches is found by proportional (secant through the origin) steps on
 /// measured times, then the RMSEs come from `N_MC` runs.
 ///
+/// The calibration is `cfg.calibration`'s; [`table2_with`] takes one already made.
+///
+/// # Errors
+/// A bad configuration or a filter error; never the calibration's timings.
+pub fn table2(cfg: &TableConfig) -> Result<TableReport> {
+    cfg.validate()?;
+    let report = crate::calibrate::calibrate_report(&cfg.calibration)?;
+    table2_with(cfg, &report)
+}
+
+/// [`table2`] with a calibration already made.
+///
 /// # Errors
 /// A bad configuration or a filter error.
-pub fn table2(cfg: &TableConfig) -> Result<TableReport> {
+pub fn table2_with(cfg: &TableConfig, calibration: &CalibrationReport) -> Result<TableReport> {
     cfg.validate()?;
     let truth = cfg.radar.truth();
     let target = time_of(cfg, &cfg.partitions[0], cfg.n_pf, &truth)?;
@@ -300,12 +456,14 @@ pub fn table2(cfg: &TableConfig) -> Result<TableReport> {
         rows.push(row(&part.name(), n, mc.pos, mc.vel, mc.acc, time_s));
         curves.push(mc.curve);
     }
+    let measured_n: Vec<usize> = rows.iter().map(|r| r.n).collect();
     Ok(TableReport {
         table: TableResult { partitions: rows },
         paper: paper_table2(),
         target,
         reached,
         rmse_over_time: curves,
+        model: Some(model_prediction(cfg, calibration, target, &measured_n)?),
     })
 }
 
@@ -363,5 +521,6 @@ pub fn table3(cfg: &TableConfig) -> Result<TableReport> {
         target,
         reached,
         rmse_over_time: curves,
+        model: None,
     })
 }

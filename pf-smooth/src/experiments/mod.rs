@@ -17,19 +17,15 @@ pub use paper::{
 };
 pub use pf_core::mc::Scale;
 
-use crate::ar1::{Ar1Data, Ar1Statistics, SuffStats, Theta, ThetaSamples};
+use crate::ar1::{Ar1Data, SuffStats, Theta, ThetaSamples};
 use crate::em::{
-    Estimator, ParticleSchedule, StochasticEm, paper_filter_config, particle_statistics,
-    run_statistics,
+    Estimator, ParticleSchedule, StochasticEm, lag_statistics, paper_filter_config,
+    particle_statistics, run_statistics,
 };
 use crate::error::Result;
 use crate::exact::{exact_em, exact_em_step, exact_statistics};
-use crate::fixed_lag::FixedLag;
-use crate::path_space::PathSpace;
-use pf_core::filter::ParticleFilter;
 use pf_core::mc::{Par, stream_rng, try_replicate};
 use pf_core::models::NoisyAr1;
-use pf_core::observe::{Observer, StepView};
 use pf_core::params::at_least_one;
 use serde::{Deserialize, Serialize};
 
@@ -428,17 +424,6 @@ pub struct LagSweepResult {
     pub joint: ThetaSamples,
 }
 
-/// Many fixed-lag estimators fed by one filter run.
-struct Lags<'a>(Vec<FixedLag<f64, Ar1Statistics<'a>>>);
-
-impl Observer<f64> for Lags<'_> {
-    fn on_step(&mut self, view: &StepView<'_, f64>) {
-        for f in &mut self.0 {
-            f.on_step(view);
-        }
-    }
-}
-
 /// Run the lag sweep.
 ///
 /// # Errors
@@ -449,25 +434,14 @@ pub fn lag_sweep(cfg: &LagSweepConfig) -> Result<LagSweepResult> {
     let n = data.n();
     let exact = exact_em_step(&data, &theta)?;
     let filter = paper_filter_config(cfg.particles);
-    let ys = data.filter_input();
     let reps = try_replicate(cfg.seed, cfg.replications, Par::Rayon, |_, rng| {
-        let stats = Ar1Statistics::new(&data);
-        let mut joint = PathSpace::new(stats);
-        let mut lags = Lags(
-            cfg.lags
-                .iter()
-                .map(|&d| FixedLag::new(stats, d.min(n + 1)))
-                .collect::<Result<_>>()?,
-        );
-        let mut pf = ParticleFilter::bootstrap(theta.model(data.y()[0])?, filter)?;
-        pf.run(&ys, None, rng, &mut (&mut joint, &mut lags))?;
-        let j = SuffStats::from_slice(n, &joint.estimate()?)?.m_step()?;
-        let f = lags
-            .0
+        let run = lag_statistics(&data, &theta, filter, &cfg.lags, false, rng)?;
+        let f = run
+            .fixed_lag
             .iter()
-            .map(|f| SuffStats::from_slice(n, &f.estimate()?)?.m_step())
+            .map(SuffStats::m_step)
             .collect::<Result<Vec<_>>>()?;
-        Ok::<_, crate::SmoothError>((j, f))
+        Ok::<_, crate::SmoothError>((run.joint.m_step()?, f))
     })?;
     let joint: Vec<Theta> = reps.iter().map(|r| r.0).collect();
     let fixed_lag = (0..cfg.lags.len())

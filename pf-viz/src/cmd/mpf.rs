@@ -3,14 +3,14 @@
 //!
 //! | subcommand | prints |
 //! |---|---|
-//! | `calibrate` | this machine's EF model: `{"flop_ns", "c1", "c2", "c3"}` |
+//! | `calibrate` | this machine's EF model: `{"flop_ns", "c1", "c2", "c3"}`, plus `"spread"` (relative, bootstrap over rounds), `"rounds"`, `"clock"`, `"notes"` |
 //! | `ratio` | Figs. 1–2: `{"m": [3..9], "curves": [{"k", "ct_zero", "ct_nonzero"}]}` |
-//! | `table2` / `table3` | `{"partitions": [{"name", "N", "rmse_pos", "rmse_vel", "rmse_acc", "time_s"}]}` plus the paper's table, the target and whether each search reached it |
+//! | `table2` / `table3` | `{"partitions": [{"name", "N", "rmse_pos", "rmse_vel", "rmse_acc", "time_s"}]}` plus the paper's table, the target and whether each search reached it; `table2` adds to each partition `"predicted_N"` (eq. (11), calibrated) and `"predicted_N_ext"` (the extended model), and `"model"` (calibration, `c_m`, per-particle terms) |
 //! | `advise` | partitions ranked by predicted cost on this machine |
 
 use clap::{Args, Subcommand, ValueEnum};
 use pf_mpf::advisor::{AdviseConfig, advise};
-use pf_mpf::calibrate::{CalibrateConfig, calibrate};
+use pf_mpf::calibrate::{CalibrateConfig, CalibrationReport, calibrate, calibrate_report};
 use pf_mpf::complexity::CtCase;
 use pf_mpf::experiments::{RatioConfig, Scale, TableConfig, TableReport, ratio, table2, table3};
 use serde::Serialize;
@@ -47,6 +47,9 @@ pub struct CalibrateArgs {
     /// A few-millisecond calibration with fewer sizes and repetitions.
     #[arg(long)]
     pub quick: bool,
+    /// Interleaved timing rounds (default: 15, with --quick 3); the median over rounds is fitted.
+    #[arg(long, value_name = "R")]
+    pub rounds: Option<usize>,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -112,21 +115,38 @@ pub fn run(cmd: MpfCommand) -> Result<()> {
     let mpf = VizError::paper("mpf");
     match cmd {
         MpfCommand::Calibrate(a) => {
-            let cfg = if a.quick {
+            let mut cfg = if a.quick {
                 CalibrateConfig::quick()
             } else {
                 CalibrateConfig::default()
             };
-            let c = calibrate(&cfg).map_err(mpf)?;
-            if a.json {
-                print_json(&c)
-            } else {
-                print_line(format_args!(
-                    "one flop = {:.4} ns; c1 = {:.0} EF (likelihood), c2 = {:.0} EF (resampling), c3 = {:.0} EF (random number); the paper's Pentium: c1 = 445, c2 = 487, c3 = 125",
-                    c.flop_ns, c.c1, c.c2, c.c3
-                ))?;
-                Ok(())
+            if let Some(r) = a.rounds {
+                cfg.rounds = r;
             }
+            let r = calibrate_report(&cfg).map_err(mpf)?;
+            if a.json {
+                return print_json(&CalibrateJson::from(&r));
+            }
+            let (c, s) = (r.calibration, r.spread);
+            print_line(format_args!(
+                "one flop = {:.4} ns (±{:.1} %); c1 = {:.0} EF (likelihood, ±{:.1} %), c2 = {:.0} EF (resampling, ±{:.1} %), c3 = {:.0} EF (random number, ±{:.1} %); the paper's Sun Blade 100: c1 = 445, c2 = 487, c3 = 125",
+                c.flop_ns,
+                100.0 * s.flop_ns,
+                c.c1,
+                100.0 * s.c1,
+                c.c2,
+                100.0 * s.c2,
+                c.c3,
+                100.0 * s.c3
+            ))?;
+            print_line(format_args!(
+                "({} interleaved rounds on the {}; ± is the bootstrap over rounds)",
+                r.rounds, r.clock
+            ))?;
+            for n in &r.notes {
+                print_line(format_args!("note: {n}"))?;
+            }
+            Ok(())
         }
         MpfCommand::Ratio(a) => {
             let r = ratio(&RatioConfig::default()).map_err(mpf)?;
@@ -185,14 +205,50 @@ pub fn run(cmd: MpfCommand) -> Result<()> {
     }
 }
 
+/// `calibrate --json`: the contract's four numbers, then how they were measured.
+#[derive(Serialize)]
+struct CalibrateJson<'a> {
+    #[serde(flatten)]
+    calibration: pf_mpf::calibrate::Calibration,
+    spread: pf_mpf::calibrate::CalibrationSpread,
+    rounds: usize,
+    clock: &'a str,
+    notes: &'a [String],
+}
+
+impl<'a> From<&'a CalibrationReport> for CalibrateJson<'a> {
+    fn from(r: &'a CalibrationReport) -> Self {
+        Self {
+            calibration: r.calibration,
+            spread: r.spread,
+            rounds: r.rounds,
+            clock: &r.clock,
+            notes: &r.notes,
+        }
+    }
+}
+
+/// One partition of `table2|table3 --json`: the contract's keys, then Table II's model.
+#[derive(Serialize)]
+struct RowJson<'a> {
+    #[serde(flatten)]
+    row: &'a pf_mpf::experiments::TableRow,
+    #[serde(rename = "predicted_N", skip_serializing_if = "Option::is_none")]
+    predicted_n: Option<u64>,
+    #[serde(rename = "predicted_N_ext", skip_serializing_if = "Option::is_none")]
+    predicted_n_ext: Option<u64>,
+}
+
 /// `table2 --json` / `table3 --json`: the contract's `partitions`, plus the paper's values
 /// and the search outcome.
 #[derive(Serialize)]
 struct TableJson<'a> {
-    partitions: &'a [pf_mpf::experiments::TableRow],
+    partitions: Vec<RowJson<'a>>,
     paper: &'a [pf_mpf::experiments::TableRow],
     target: f64,
     reached: &'a [bool],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    model: Option<&'a pf_mpf::experiments::ModelPrediction>,
 }
 
 fn table(
@@ -211,20 +267,56 @@ fn table(
         cfg.n_mc = mc;
     }
     let r = run(&cfg).map_err(VizError::paper("mpf"))?;
+    let model = r.model.as_ref();
+    let at = |v: Option<&Vec<f64>>, j: usize| {
+        v.and_then(|v| v.get(j))
+            .filter(|x| x.is_finite() && **x >= 0.0)
+            .map(|x| x.round() as u64)
+    };
     if a.json {
+        let partitions = r
+            .table
+            .partitions
+            .iter()
+            .enumerate()
+            .map(|(j, row)| RowJson {
+                row,
+                predicted_n: at(model.map(|m| &m.predicted_n), j),
+                predicted_n_ext: at(model.map(|m| &m.predicted_n_ext), j),
+            })
+            .collect();
         return print_json(&TableJson {
-            partitions: &r.table.partitions,
+            partitions,
             paper: &r.paper.partitions,
             target: r.target,
             reached: &r.reached,
+            model,
         });
     }
     print_line(format_args!(
         "Table {which}, N_MC = {} (paper's values in brackets):",
         cfg.n_mc
     ))?;
-    for (ours, paper) in r.table.partitions.iter().zip(&r.paper.partitions) {
-        print_line(format_args!("  {}", ours.against(paper)))?;
+    for (j, (ours, paper)) in r
+        .table
+        .partitions
+        .iter()
+        .zip(&r.paper.partitions)
+        .enumerate()
+    {
+        match (
+            at(model.map(|m| &m.predicted_n), j),
+            at(model.map(|m| &m.predicted_n_ext), j),
+        ) {
+            (Some(n), Some(e)) => print_line(format_args!(
+                "  {}; the calibrated model predicts N = {n} (eq. (11)), {e} (extended)",
+                ours.against(paper)
+            ))?,
+            _ => print_line(format_args!("  {}", ours.against(paper)))?,
+        }
+    }
+    for n in model.map_or(&[][..], |m| &m.notes[..]) {
+        print_line(format_args!("note: {n}"))?;
     }
     Ok(())
 }

@@ -520,8 +520,9 @@ fn notes(r: &SmoothResult) -> Vec<String> {
          data; Fig. 1 shows the first 100 steps at the true θ; the SEM chains use the joint \
          estimator; joint and fixed-lag boxes of Fig. 3 come from the same particle runs."
             .into(),
-        "The fixed-lag cache holds each particle's last δ terms s_k rather than its last δ \
-         positions: the same numbers without re-evaluating s_k, still O(N·δ) memory."
+        "The fixed-lag estimator keeps each particle's last δ positions, as Section 4 does, \
+         as columns of the batch filter's state beside its joint sums γ, and evaluates s_k \
+         from them when it freezes a term: O(N·δ) memory."
             .into(),
     ];
     notes.extend(
