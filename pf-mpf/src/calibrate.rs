@@ -21,7 +21,8 @@
 
 use crate::complexity::EfCoefficients;
 use crate::error::{MpfError, Result};
-use crate::radar::RadarObs;
+use crate::model::{Measurement, TILE};
+use crate::radar::{RadarObs, RangeAzimuth};
 use pf_core::filter::batch::{BatchModel, Cols, ColsMut};
 use pf_core::params::{self, ParamError};
 use pf_core::resample::{Resample, Resampler};
@@ -801,17 +802,22 @@ fn product_columns(a: &[f64], x: &[Vec<f64>], out: &mut [Vec<f64>]) {
     }
 }
 
-/// Eq. (13b)'s Gaussian log-likelihood of `N` particles, column by column as the batch
-/// filters compute it: range `√(p_x² + p_y²)`, azimuth `atan2(p_y, p_x)`, the azimuth
-/// residual wrapped into `[−π, π]`, and `−½ eᵀR⁻¹e` with the radar's diagonal `R`.
+/// Eq. (13b)'s Gaussian log-likelihood of `N` particles as the filters compute it: tile by
+/// tile ([`TILE`] particles), the residuals from the radar measurement's own
+/// [`Measurement::residuals`] (range, azimuth, the azimuth wrapped), then `−½ eᵀR⁻¹e`
+/// with the radar's diagonal `R`.
 fn radar_log_lik(y: &RadarObs, r_inv: [f64; 2], px: &[f64], py: &[f64], lw: &mut [f64]) {
-    const ROUND: f64 = 6_755_399_441_055_744.0; // 1.5·2⁵²: x + ROUND − ROUND rounds x
-    let tau = std::f64::consts::TAU;
-    for ((l, &x), &yy) in lw.iter_mut().zip(px).zip(py) {
-        let er = y[0] - (x * x + yy * yy).sqrt();
-        let d = y[1] - yy.atan2(x);
-        let ea = d - tau * ((d * (1.0 / tau) + ROUND) - ROUND);
-        *l = -0.5 * (er * er * r_inv[0] + ea * ea * r_inv[1]);
+    let mut e = [[0.0; TILE]; 2];
+    for ((lw, px), py) in lw
+        .chunks_mut(TILE)
+        .zip(px.chunks(TILE))
+        .zip(py.chunks(TILE))
+    {
+        let m = lw.len();
+        Measurement::<2, 2>::residuals(&RangeAzimuth, 0, y, &[px, py], m, &mut e);
+        for (q, l) in lw.iter_mut().enumerate() {
+            *l = -0.5 * (e[0][q] * e[0][q] * r_inv[0] + e[1][q] * e[1][q] * r_inv[1]);
+        }
     }
 }
 

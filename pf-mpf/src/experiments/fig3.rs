@@ -11,11 +11,13 @@
 use super::Scale;
 use crate::calibrate::{
     CalibrateConfig, Calibration, CalibrationReport, CalibrationSpread, StageTimes, Stopwatch,
-    Timings, fit_timings, measure, median,
+    Timings, fit_timings, measure, median, stage_times,
 };
 use crate::complexity::{Alg1Matrices, ef_ct_zero, ef_structural, fit_state_traffic};
 use crate::error::{MpfError, Result};
 use crate::mpf::MpfConfig;
+use crate::mpf::SharedMpf;
+use crate::radar::RadarObs;
 use crate::radar::{Partition, RadarConfig, run_partition};
 use pf_core::mc::stream_rng;
 use pf_core::params::ParamError;
@@ -198,6 +200,40 @@ fn matrices_pk<const P: usize, const K: usize>(
     })
 }
 
+fn stages_pk<const P: usize, const K: usize>(
+    part: &Partition,
+    radar: &RadarConfig,
+    y: &RadarObs,
+    n: usize,
+    rounds: usize,
+    seed: u64,
+) -> Result<StageTimes> {
+    let model = SharedMpf::new(part.model::<P, K>(radar)?)?;
+    stage_times(&model, 1, y, n, rounds, seed)
+}
+
+/// Each stage of one step of partition `part`'s filter ([`SharedMpf`], Alg. 1), timed on
+/// its own with `n` particles and observation `y` ([`stage_times`]).
+///
+/// # Errors
+/// A bad configuration or partition.
+pub fn partition_stage_times(
+    part: &Partition,
+    radar: &RadarConfig,
+    y: &RadarObs,
+    n: usize,
+    rounds: usize,
+    seed: u64,
+) -> Result<StageTimes> {
+    match part.k() {
+        0 => stages_pk::<6, 0>(part, radar, y, n, rounds, seed),
+        1 => stages_pk::<5, 1>(part, radar, y, n, rounds, seed),
+        2 => stages_pk::<4, 2>(part, radar, y, n, rounds, seed),
+        3 => stages_pk::<3, 3>(part, radar, y, n, rounds, seed),
+        _ => stages_pk::<2, 4>(part, radar, y, n, rounds, seed),
+    }
+}
+
 /// The matrices of Alg. 1 for one partition of the radar model, eq. (13), behind the
 /// extended model's flop count ([`Alg1Matrices::flops_per_particle`]).
 ///
@@ -302,6 +338,15 @@ fn fig3_from(
     let t_f = cfg.radar.n_steps;
     let n = cfg.n_particles;
     let measured: Vec<f64> = times.iter().map(|t| median(t)).collect();
+    let truth = cfg.radar.truth();
+    let y = cfg
+        .radar
+        .measure(&truth[1..2], &mut stream_rng(cfg.seed, 0))[0]
+        .unwrap_or_else(|| RadarObs::new(2500.0, 0.64));
+    let stages = parts
+        .iter()
+        .map(|q| partition_stage_times(q, &cfg.radar, &y, cfg.n_particles, cfg.reps, cfg.seed))
+        .collect::<Result<Vec<_>>>()?;
     let structure: Vec<Alg1Matrices> = parts
         .iter()
         .map(|q| alg1_matrices(q, &cfg.radar))
@@ -320,7 +365,8 @@ fn fig3_from(
         .zip(&measured)
         .zip(times)
         .zip(&structure)
-        .map(|(((part, &measured_s), t), m)| {
+        .zip(&stages)
+        .map(|((((part, &measured_s), t), m), &stages)| {
             let (p, k) = (part.p(), part.k());
             let predicted_s = predicted_time_s(&calibration, (p, k), None, n, t_f);
             let predicted_ext_s = predicted_time_s(&calibration, (p, k), Some((m, c_m)), n, t_f);
@@ -339,7 +385,7 @@ fn fig3_from(
                 rel_error_ext: (predicted_ext_s - measured_s) / measured_s,
                 measured_range_s: lo_hi,
                 flops_structural: m.flops_per_particle(),
-                stages: None,
+                stages: Some(stages),
             }
         })
         .collect();

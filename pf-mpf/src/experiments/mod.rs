@@ -21,7 +21,7 @@ mod traces;
 
 pub use fig3::{
     Fig3Config, Fig3Result, Fig3Row, alg1_matrices, fig3, fig3_calibrated, fig3_with,
-    predicted_time_s,
+    partition_stage_times, predicted_time_s,
 };
 pub use ratio::{RatioConfig, RatioCurve, RatioResult, ratio};
 pub use tables::{
