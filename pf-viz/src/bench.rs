@@ -111,16 +111,29 @@ pub fn bootstrap(args: &BenchBootstrapArgs) -> Result<BenchResult> {
             .map(|s| s.log_lik)
             .map_err(VizError::core("bench"))
     })?;
-    Ok(BenchResult {
-        particles: args.particles,
+    Ok(BenchResult::new(
+        args.particles,
         steps,
-        threads: args.threads,
-        seconds: runs.seconds,
-        ns_per_particle_step: runs.seconds * 1e9 / (args.particles as f64 * steps as f64),
-        loglik: runs.loglik,
-        repeat: args.repeat,
-        seconds_median: runs.seconds_median,
-    })
+        args.threads,
+        args.repeat,
+        &runs,
+    ))
+}
+
+impl BenchResult {
+    /// The result of `repeat` timed runs of `particles` particles over `steps` steps.
+    fn new(particles: usize, steps: usize, threads: usize, repeat: usize, runs: &Runs) -> Self {
+        BenchResult {
+            particles,
+            steps,
+            threads,
+            seconds: runs.seconds,
+            ns_per_particle_step: runs.seconds * 1e9 / (particles as f64 * steps as f64),
+            loglik: runs.loglik,
+            repeat,
+            seconds_median: runs.seconds_median,
+        }
+    }
 }
 
 /// The fastest and the median of `repeat` timed runs, and the last run's log-likelihood.
@@ -162,27 +175,15 @@ fn time_runs(
     })
 }
 
-/// The JSON contract of `pf-viz bench filter --json`.
+/// The JSON contract of `pf-viz bench filter --json`: the model's name and
+/// [`BenchResult`]'s keys.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FilterBenchResult {
     /// `ar1`, `radar` or `bearings`.
     pub model: String,
-    /// N.
-    pub particles: usize,
-    /// Steps filtered.
-    pub steps: usize,
-    /// Worker threads.
-    pub threads: usize,
-    /// Wall-clock seconds of filtering (the fastest of the `repeat` runs).
-    pub seconds: f64,
-    /// `seconds / (N·steps)` in nanoseconds.
-    pub ns_per_particle_step: f64,
-    /// The filter's log-likelihood estimate.
-    pub loglik: f64,
-    /// Runs timed (`--repeat`).
-    pub repeat: usize,
-    /// The median of the runs' seconds.
-    pub seconds_median: f64,
+    /// The timing and the estimate.
+    #[serde(flatten)]
+    pub run: BenchResult,
 }
 
 /// Run `pf-viz bench filter`.
@@ -201,7 +202,10 @@ pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
     if args.steps == Some(0) {
         return Err(invalid("--steps must be at least 1".into()));
     }
-    let (name, steps, runs) = match args.model {
+    let result = |steps: usize, runs: &Runs| {
+        BenchResult::new(args.particles, steps, args.threads, args.repeat, runs)
+    };
+    let (name, run) = match args.model {
         BenchModel::Ar1 => {
             let ar1 = BenchBootstrapArgs {
                 data: args.data.clone(),
@@ -213,13 +217,7 @@ pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
                 repeat: args.repeat,
                 json: args.json,
             };
-            let r = bootstrap(&ar1)?;
-            let runs = Runs {
-                seconds: r.seconds,
-                seconds_median: r.seconds_median,
-                loglik: r.loglik,
-            };
-            ("ar1", r.steps, runs)
+            ("ar1", bootstrap(&ar1)?)
         }
         BenchModel::Radar => {
             let mpf = VizError::paper("bench filter radar");
@@ -249,7 +247,7 @@ pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
             };
             let steps = bench.observations().len();
             let runs = time_runs(args.threads, args.repeat, || bench.run().map_err(mpf))?;
-            ("radar", steps, runs)
+            ("radar", result(steps, &runs))
         }
         BenchModel::Bearings => {
             if args.data.is_some() {
@@ -262,19 +260,12 @@ pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
             let steps = args.steps.unwrap_or(40);
             let mut bench = BearingsBench::new(args.particles, steps, args.seed).map_err(hom)?;
             let runs = time_runs(args.threads, args.repeat, || bench.run().map_err(hom))?;
-            ("bearings", steps, runs)
+            ("bearings", result(steps, &runs))
         }
     };
     Ok(FilterBenchResult {
         model: name.into(),
-        particles: args.particles,
-        steps,
-        threads: args.threads,
-        seconds: runs.seconds,
-        ns_per_particle_step: runs.seconds * 1e9 / (args.particles as f64 * steps as f64),
-        loglik: runs.loglik,
-        repeat: args.repeat,
-        seconds_median: runs.seconds_median,
+        run,
     })
 }
 

@@ -84,14 +84,14 @@ pub fn run(cli: Cli) -> Result<()> {
                 print_line(format_args!(
                     "{} filter: N = {}, {} steps, {} thread(s): {:.3} s (fastest of {}; median {:.3} s), {:.2} ns per particle-step, log-likelihood {:.3}",
                     r.model,
-                    r.particles,
-                    r.steps,
-                    r.threads,
-                    r.seconds,
-                    r.repeat,
-                    r.seconds_median,
-                    r.ns_per_particle_step,
-                    r.loglik
+                    r.run.particles,
+                    r.run.steps,
+                    r.run.threads,
+                    r.run.seconds,
+                    r.run.repeat,
+                    r.run.seconds_median,
+                    r.run.ns_per_particle_step,
+                    r.run.loglik
                 ))?;
             }
             Ok(())
