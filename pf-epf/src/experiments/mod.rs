@@ -26,6 +26,7 @@
 //! `R` > 50. They are kept so that the report's numbers stay as published.
 
 mod comparison;
+pub mod scenes;
 mod section4;
 
 pub use comparison::{Comparison, ComparisonConfig, MethodSummary, compare, compare_with_progress};
