@@ -617,6 +617,78 @@ impl Tracker {
     }
 }
 
+/// Where a tracker's `q` or `r` came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseSource {
+    /// Given by the user.
+    Given,
+    /// Estimated from the init tracks ([`Init::estimate_noise`]).
+    Estimated,
+    /// [`TrackerConfig::default`]'s, the init tracks being too short to estimate it.
+    Default,
+}
+
+impl NoiseSource {
+    /// The name in messages and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            NoiseSource::Given => "given",
+            NoiseSource::Estimated => "estimated from the init tracks",
+            NoiseSource::Default => "default (init tracks under 4 frames)",
+        }
+    }
+}
+
+/// The `q` and `r` a tracker uses, and where each came from.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NoiseChoice {
+    /// Process noise sd per √frame.
+    pub q: f64,
+    /// Detection noise sd.
+    pub r: f64,
+    /// Where `q` came from.
+    pub q_source: NoiseSource,
+    /// Where `r` came from.
+    pub r_source: NoiseSource,
+}
+
+impl NoiseChoice {
+    /// The given values where there are some; the others estimated from `init`'s tracks,
+    /// or [`TrackerConfig::default`]'s when no track has the four frames the estimate needs.
+    pub fn new(init: &Init, q: Option<f64>, r: Option<f64>) -> Self {
+        let est = if q.is_none() || r.is_none() {
+            init.estimate_noise()
+        } else {
+            None
+        };
+        let d = TrackerConfig::default();
+        let pick =
+            |given: Option<f64>, estimated: Option<f64>, default: f64| match (given, estimated) {
+                (Some(v), _) => (v, NoiseSource::Given),
+                (None, Some(v)) => (v, NoiseSource::Estimated),
+                (None, None) => (default, NoiseSource::Default),
+            };
+        let (q, q_source) = pick(q, est.map(|e| e.q), d.q);
+        let (r, r_source) = pick(r, est.map(|e| e.r), d.r);
+        NoiseChoice {
+            q,
+            r,
+            q_source,
+            r_source,
+        }
+    }
+
+    /// `cfg` with this `q` and `r`.
+    pub fn apply(&self, cfg: &TrackerConfig) -> TrackerConfig {
+        TrackerConfig {
+            q: self.q,
+            r: self.r,
+            ..*cfg
+        }
+    }
+}
+
 /// The frames to track: every detection frame after the last init frame.
 ///
 /// # Errors

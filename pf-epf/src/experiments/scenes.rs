@@ -21,7 +21,7 @@ use crate::metrics::{
 };
 use crate::scenario::{Scenario, ScenarioConfig, TruthTrack, simulate};
 use crate::tracker::{
-    Record, Track, TrackResult, TrackStatus, TrackerConfig, track, tracked_frames,
+    NoiseChoice, Record, Track, TrackResult, TrackStatus, TrackerConfig, track, tracked_frames,
 };
 use nalgebra::{Matrix2, Matrix2x4, Matrix4, Vector4};
 use pf_core::mc::{Par, Scale, mean_and_se, stream_rng, try_replicate};
@@ -139,16 +139,11 @@ pub struct ScenesResult {
 /// The tracker settings `pf-viz epf track` uses without `--q`, `--r`: `q̂`, `r̂` from the
 /// init tracks, or the defaults when they are too short.
 pub fn default_flags(init: &Init, association: Association, n_particles: usize) -> TrackerConfig {
-    let mut c = TrackerConfig {
+    NoiseChoice::new(init, None, None).apply(&TrackerConfig {
         association,
         n_particles,
         ..TrackerConfig::default()
-    };
-    if let Some(e) = init.estimate_noise() {
-        c.q = e.q;
-        c.r = e.r;
-    }
-    c
+    })
 }
 
 /// A constant-velocity Kalman filter per target with nearest-neighbour association: the
@@ -335,6 +330,9 @@ pub fn track_cv_kalman(
     })
 }
 
+/// Replication 0's observed frames and true paths, for the figure.
+type ExampleTruth = Option<(Vec<i64>, Vec<TruthTrack>)>;
+
 struct Outcome {
     noise: Option<NoiseEstimate>,
     per_method: Vec<[f64; 4]>,
@@ -358,7 +356,7 @@ pub fn scenes_with_progress(cfg: &ScenesConfig, tick: &(dyn Fn() + Sync)) -> Res
     for (k, &s) in Scenario::STRESS.iter().enumerate() {
         let seed = cfg.seed.wrapping_add(7000 + 10 * k as u64);
         let sc = ScenarioConfig::new(s);
-        let runs: Vec<(Outcome, Option<(Vec<i64>, Vec<TruthTrack>)>)> =
+        let runs: Vec<(Outcome, ExampleTruth)> =
             try_replicate(seed, cfg.replications, cfg.par, |r, rng| {
                 let sim = simulate(&sc, rng)?;
                 let noise = sim.init.estimate_noise();
