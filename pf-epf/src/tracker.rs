@@ -31,7 +31,8 @@
 //! `d = Â(t) − Â(t−1)`); when the target takes a detection again, its particles' process
 //! noise at that step gets the line's variance, `r²(1/n + …)` ([`Drift::extra_var`]), so
 //! that the estimate can reach the detection. With consecutive associations none of this
-//! applies and the tracker is the paper's.
+//! applies and the tracker is the paper's ([`TrackerConfig::reacquire`] `= false` turns it
+//! off altogether).
 //!
 //! Targets associated at their previous step (or at init) choose first; the others (coasting
 //! or lost), whose wider gates would otherwise take a detection from a target that holds
@@ -85,6 +86,16 @@ pub struct TrackerConfig {
     /// reported [`TrackStatus::Lost`] (up to it, [`TrackStatus::Coasting`]).
     #[serde(default = "default_lost_after")]
     pub lost_after: usize,
+    /// Coast on the least-squares line with a growing gate, and let targets that took a
+    /// detection at their previous step choose first (the module docs); `false` is the
+    /// paper's tracker, which extrapolates the dynamic model whatever happened and
+    /// associates every target at once.
+    #[serde(default = "default_reacquire")]
+    pub reacquire: bool,
+}
+
+fn default_reacquire() -> bool {
+    true
 }
 
 fn default_lost_after() -> usize {
@@ -105,6 +116,7 @@ impl Default for TrackerConfig {
             spline: SplineOrder::Linear,
             energy_spline: SplineOrder::Quadratic,
             lost_after: 3,
+            reacquire: true,
         }
     }
 }
@@ -484,7 +496,7 @@ impl Tracker {
         for s in &self.targets {
             let dt = (frame - s.last_frame) as f64;
             let t_prev = s.last_frame as f64;
-            let (d, drift_var, extra) = if s.misses == 0 {
+            let (d, drift_var, extra) = if s.misses == 0 || !self.cfg.reacquire {
                 // The paper's step: the dynamic model's displacement.
                 let d = s.dynamics.displacement(t_prev, dt);
                 (
@@ -558,7 +570,7 @@ impl Tracker {
     fn associate(&mut self, ys: &[Vec2]) {
         let fresh = |s: &TargetState| s.misses == 0;
         let n_fresh = self.targets.iter().filter(|s| fresh(s)).count();
-        if n_fresh == 0 || n_fresh == self.targets.len() {
+        if !self.cfg.reacquire || n_fresh == 0 || n_fresh == self.targets.len() {
             self.associator.associate(
                 &self.geometry,
                 ys,
@@ -635,7 +647,7 @@ impl NoiseSource {
         match self {
             NoiseSource::Given => "given",
             NoiseSource::Estimated => "estimated from the init tracks",
-            NoiseSource::Default => "default (init tracks under 4 frames)",
+            NoiseSource::Default => "default: no init track has 4 frames",
         }
     }
 }

@@ -172,6 +172,51 @@ fn a_target_whose_detections_stop_is_lost_then_reacquired() {
     }
 }
 
+/// The same target with `reacquire = false` (the paper's tracker) still reports its status:
+/// whatever happens after frame 20, frames 10–12 are coasting and 13–20 lost.
+#[test]
+fn the_papers_tracker_reports_status_too() {
+    let init = Init::new(
+        &(0..4)
+            .flat_map(|f| {
+                [0, 1].map(|k| InitRow {
+                    target: k,
+                    frame: f,
+                    position: Vec2::new(f as f64, 10.0 * k as f64),
+                })
+            })
+            .collect::<Vec<_>>(),
+    )
+    .unwrap();
+    let rows: Vec<Detection> = (4..=30)
+        .flat_map(|f| [0i64, 1].map(|k| (f, k)))
+        .filter(|&(f, k)| !(k == 0 && (10..=20).contains(&f)))
+        .map(|(f, k)| Detection {
+            frame: f,
+            position: Vec2::new(f as f64, 10.0 * k as f64),
+            target: Some(k),
+        })
+        .collect();
+    let dets = Detections::new(rows).unwrap();
+    let cfg = TrackerConfig {
+        n_particles: 100,
+        reacquire: false,
+        ..TrackerConfig::default()
+    };
+    let res = track(&dets, &init, &cfg, Record::Tracks, &mut stream_rng(4, 0)).unwrap();
+    for (i, &f) in res.frames.iter().enumerate() {
+        let want = match f {
+            10..=12 => Some(TrackStatus::Coasting),
+            13..=20 => Some(TrackStatus::Lost),
+            _ if f < 10 => Some(TrackStatus::Associated),
+            _ => None,
+        };
+        if let Some(w) = want {
+            assert_eq!(res.tracks[0].status[i], w, "frame {f}");
+        }
+    }
+}
+
 /// The stress scenes with default flags (q̂, r̂ from the init tracks), 60 replications: on
 /// the crossing (noise sd 1, twice the default r), the default tracker (energy) keeps its
 /// targets: the fraction of target-frames without a detection is at most the Kalman

@@ -106,6 +106,13 @@ pub struct TrackArgs {
     /// reported lost.
     #[arg(long, value_name = "N", default_value_t = TrackerConfig::default().lost_after)]
     pub lost_after: usize,
+    /// The paper's tracker: a target without a detection keeps extrapolating its dynamic
+    /// model with a gate that grows only with its particles, and every target associates
+    /// at once (by default a coasting target follows the line through its last detections,
+    /// its gate grows with the time since its last association, and targets that had a
+    /// detection at their previous step choose first).
+    #[arg(long)]
+    pub no_reacquire: bool,
     /// Also write the tracks as CSV: one row per target and tracked frame, columns
     /// target,frame,x,y,detection,status (detection: the row index, empty when none).
     #[arg(long, value_name = "FILE.csv")]
@@ -266,7 +273,8 @@ impl TrackerArgs {
     }
 }
 
-/// The one stderr line saying which `q` and `r` the tracker uses.
+/// The one stderr line saying which `q` and `r` the tracker used (printed after a
+/// successful run only: an error is one stderr line and nothing else).
 fn noise_note(n: &NoiseChoice) {
     eprintln!(
         "q = {:.4} ({}), r = {:.4} ({})",
@@ -391,13 +399,13 @@ fn run_track(a: &TrackArgs) -> Result<()> {
     let init = read_init(&a.tracker.init)?;
     let (mut cfg, noise) = a.tracker.config(a.association, &init);
     cfg.lost_after = a.lost_after;
+    cfg.reacquire = !a.no_reacquire;
     cfg.validate().map_err(|e| VizError::Argument {
         message: e.to_string(),
     })?;
     if let Some(out) = &a.out {
         check_writable([out.as_path()])?;
     }
-    noise_note(&noise);
     let result = track(
         &detections,
         &init,
@@ -406,6 +414,8 @@ fn run_track(a: &TrackArgs) -> Result<()> {
         &mut stream_rng(a.tracker.seed, 0),
     )
     .map_err(VizError::paper("epf"))?;
+    // After the run: an error is one stderr line and nothing else.
+    noise_note(&noise);
     if let Some(out) = &a.out {
         write_csv(
             out,
@@ -499,7 +509,6 @@ fn run_energies(a: &EnergiesArgs) -> Result<()> {
     cfg.validate().map_err(|e| VizError::Argument {
         message: e.to_string(),
     })?;
-    noise_note(&noise);
     let t = energies_at(
         &detections,
         &init,
@@ -513,6 +522,7 @@ fn run_energies(a: &EnergiesArgs) -> Result<()> {
         },
         e => VizError::paper("epf")(e),
     })?;
+    noise_note(&noise);
     let [w1, w2, w3] = t.weighted;
     let [r1, r2, r3] = t.raw;
     let out = EnergiesJson {

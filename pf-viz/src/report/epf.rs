@@ -730,12 +730,12 @@ fn scenes_report(
         }
     }
     report.tables.push(Table {
-        id: "stress-scenes".into(),
+        id: "stress-scenes-errors".into(),
         caption: format!(
             "Three stress scenes beside the paper's tests, tracked as `pf-viz epf track` \
              tracks them with default flags (q and r estimated from 8 init frames per \
              target), with energy and nn association, against a constant-velocity Kalman \
-             filter with nearest-neighbour association given the same q̂, r̂; mean ± \
+             filter with nearest-neighbour association given the same estimated q, r; mean ± \
              standard error over {} runs. Crossing: two targets at 3 units a frame crossing \
              at 30° two frames apart, detection noise sd 1 (twice the default r). Ants every \
              5th frame: six ants in a 50 × 50 dish, about 6 units between observations, \
@@ -754,14 +754,14 @@ fn scenes_report(
             "RMSE",
             "missing",
             "lost",
-            "q̂, r̂ used (truth r)",
+            "q, r used (true r)",
         ]
         .iter()
         .map(|s| s.to_string())
         .collect(),
         rows,
     });
-    let file = "epf-stress-scenes.png";
+    let file = "epf-stress-scenes-tracks.png";
     let mut panels = Vec::new();
     for sc in &res.scenes {
         let mut layers = Vec::new();
