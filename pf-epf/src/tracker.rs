@@ -25,12 +25,15 @@
 //! least-squares line through its last [`HISTORY`] associated detections (init positions
 //! included), `Â(t) = ȳ + v̂(t − τ̄)`, whose velocity averages their noise, and the gate's
 //! `r²Σc²` term becomes that prediction's variance factor,
-//! `r²(1/n + (t − τ̄)²/Σ_i(τ_i − τ̄)²)`: the gate grows with the time since the last
-//! association, quadratically once it exceeds the fitted span, and its centre does not run
-//! away with one noisy chord. The particles are moved onto the line (the drift
-//! `d = Â(t) − Â(t−1)`); when the target takes a detection again, its particles' process
-//! noise at that step gets the line's variance, `r²(1/n + …)` ([`Drift::extra_var`]), so
-//! that the estimate can reach the detection. With consecutive associations none of this
+//! `r²(1/n + (t − τ̄)²/Σ_i(τ_i − τ̄)²)`, plus the variance of a velocity that keeps
+//! changing while nothing is seen, `q²s(n(n+1)(2n+1)/6 − n)` (`s` the detections' mean
+//! spacing, `n` the spacings since the last one: a velocity random walk of `q²s` per
+//! spacing, the model behind `q̂`, beyond the `q²Δ` per step the particles carry). So the
+//! gate grows with the time since the last association, faster than any fixed velocity
+//! error, and its centre does not run away with one noisy chord. The particles are moved
+//! onto the line (the drift `d = Â(t) − Â(t−1)`); when the target takes a detection again,
+//! its particles' process noise at that step gets the same variance
+//! ([`Drift::extra_var`]), so that the estimate can reach the detection. With consecutive associations none of this
 //! applies and the tracker is the paper's ([`TrackerConfig::reacquire`] `= false` turns it
 //! off altogether).
 //!
@@ -291,6 +294,24 @@ impl History {
         self.len += 1;
     }
 
+    /// The variance factor of a velocity random walk since the last point, in units of
+    /// `q²`: with `s` the mean spacing of the points and `n = (t − τ_last)/s` spacings
+    /// elapsed, `s·(Σ_{i=1}^{n} i² − n) = s·(n(n+1)(2n+1)/6 − n)`, the position variance
+    /// a velocity taking `q²s` per spacing adds beyond the `q²Δ` per step the particles
+    /// already carry (0 for one spacing).
+    fn velocity_walk(&self, t: f64) -> f64 {
+        let pts = &self.points[..self.len];
+        let (Some(first), Some(last)) = (pts.first(), pts.last()) else {
+            return 0.0;
+        };
+        if pts.len() < 2 {
+            return 0.0;
+        }
+        let s = (last.0 - first.0) / (pts.len() - 1) as f64;
+        let n = (t - last.0) / s;
+        (s * (n * (n + 1.0) * (2.0 * n + 1.0) / 6.0 - n)).max(0.0)
+    }
+
     /// The least-squares line's value at `t` and its variance factor
     /// `1/n + (t − τ̄)²/Σ(τ_i − τ̄)²` (per unit detection variance); the last point, factor
     /// 1, with fewer than two.
@@ -507,7 +528,8 @@ impl Tracker {
             } else {
                 // Coasting: onto the least-squares line through the last detections.
                 let (line, c) = s.history.predict(frame as f64);
-                (line - s.a_tm1, r2 * c, r2 * c)
+                let v = r2 * c + q2 * s.history.velocity_walk(frame as f64);
+                (line - s.a_tm1, v, v)
             };
             self.extra_var.push(extra);
             let a_t = s.a_tm1 + d;
