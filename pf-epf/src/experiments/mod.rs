@@ -26,6 +26,7 @@
 //! `R` > 50. They are kept so that the report's numbers stay as published.
 
 mod comparison;
+pub mod scenes;
 mod section4;
 
 pub use comparison::{Comparison, ComparisonConfig, MethodSummary, compare, compare_with_progress};
@@ -130,6 +131,8 @@ pub fn tracker_for(scenario: Scenario) -> TrackerConfig {
     c.q = match scenario {
         Scenario::VanPlane | Scenario::WalkingMen => 0.3,
         Scenario::Ants => 1.0,
+        Scenario::Crossing | Scenario::SimultaneousTurns => 0.3,
+        Scenario::SparseAnts => 1.0,
     };
     c
 }
