@@ -206,6 +206,22 @@ pub fn components(g: &TargetGeometry, y: &Vec2, cfg: &EnergyConfig) -> [f64; 3] 
     e
 }
 
+/// Eq. (1) for one pair `(k, y_j)`, term by term ([`EnergyMatrix::terms`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct EnergyTerms {
+    /// `[E¹, E², E³](k, y_j)`.
+    pub raw: [f64; 3],
+    /// `Σ_k E^l(k, y_j)` over all K targets, per component.
+    pub column_sum: [f64; 3],
+    /// `α_l = 1/Σ_k E^l(k, y_j)` (0 where the sum is 0: the component then distinguishes no
+    /// target).
+    pub alpha: [f64; 3],
+    /// `α_l E^l(k, y_j)`.
+    pub weighted: [f64; 3],
+    /// `E(k, y_j) = (1/√3)·√(Σ_l (α_l E^l)²)`.
+    pub e: f64,
+}
+
 /// The K × M energies of every target against every detection of one frame: raw
 /// components, their normalised values `α_l E^l` and the magnitude `E` of eq. (1).
 /// Row-major (`k·M + j`); buffers are reused from frame to frame.
@@ -282,6 +298,27 @@ impl EnergyMatrix {
     /// `E(k, y_j)`, eq. (1).
     pub fn magnitude(&self, k: usize, j: usize) -> f64 {
         self.e[k * self.m + j]
+    }
+
+    /// Eq. (1) for the pair `(k, y_j)` term by term: the raw components, their column sums
+    /// `Σ_k E^l(k, y_j)` over all K targets, `α_l`, `α_l E^l` and `E`.
+    pub fn terms(&self, k: usize, j: usize) -> EnergyTerms {
+        let raw = self.raw(k, j);
+        let column_sum: [f64; 3] =
+            std::array::from_fn(|l| (0..self.k).map(|i| self.raw(i, j)[l]).sum());
+        EnergyTerms {
+            raw,
+            column_sum,
+            alpha: column_sum.map(|c| {
+                if c > 0.0 && c.is_finite() {
+                    1.0 / c
+                } else {
+                    0.0
+                }
+            }),
+            weighted: self.weighted(k, j),
+            e: self.magnitude(k, j),
+        }
     }
 
     /// All magnitudes, row-major.
@@ -386,6 +423,12 @@ mod tests {
                 for i in 0..k {
                     let e = m.magnitude(i, j);
                     assert!((0.0..=1.0).contains(&e), "E = {e}");
+                    let t = m.terms(i, j);
+                    for l in 0..3 {
+                        let w = (t.alpha[l] * t.raw[l]).clamp(0.0, 1.0);
+                        assert!((t.weighted[l] - w).abs() < 1e-12, "α_l E^l term by term");
+                    }
+                    assert_eq!(t.e, e);
                     let w = m.weighted(i, j);
                     let expected = ((w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) / 3.0).sqrt();
                     assert!((e - expected).abs() < 1e-15, "eq. (1)");

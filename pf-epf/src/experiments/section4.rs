@@ -3,6 +3,9 @@
 //! comparisons of its clean and clutter/miss variants, the ablation of eq. (1), REC curves
 //! (Fig. 4c), and one example run with its energies at the key frame.
 
+use super::studies::{
+    RadiusSweep, SplineRow, WrongFrame, first_wrong_frame, radius_sweep, spline_study,
+};
 use super::{Comparison, ComparisonConfig, Method, compare_with_progress, tracker_for};
 use crate::error::Result;
 use crate::metrics::rec_of;
@@ -27,6 +30,10 @@ pub struct Section4Config {
     pub variants: Vec<(f64, f64)>,
     /// Points of the REC tolerance grid.
     pub rec_points: usize,
+    /// Replications of the studies (the dynamic model's end behaviour, the radius-cap
+    /// sweep), each on the clean scenario; the runs searched for a wrong frame.
+    #[serde(default = "default_study_replications")]
+    pub study_replications: usize,
     /// The seed of every stream (see [the stream layout](super#random-streams)). Written
     /// once, as [`Section4Result::seed`], so it is not serialised here.
     #[serde(skip_serializing, default = "default_seed")]
@@ -38,6 +45,10 @@ pub struct Section4Config {
 
 fn default_seed() -> u64 {
     1
+}
+
+fn default_study_replications() -> usize {
+    200
 }
 
 /// The most variants: variant `v`'s comparison seed `seed + 1000·k + 100·v` must stay below
@@ -59,15 +70,24 @@ impl Section4Config {
             n_particles,
             variants: vec![(0.0, 0.0), (1.0, 0.1), (3.0, 0.2)],
             rec_points: 201,
+            study_replications: match scale {
+                Scale::Quick => 6,
+                Scale::Default => default_study_replications(),
+                Scale::Full => 1000,
+            },
             seed: default_seed(),
             par: Par::Rayon,
         }
     }
 
     /// How many times [`section4_with_progress`] calls its `tick`: once per replication of
-    /// every comparison and ablation.
+    /// every comparison, ablation and study.
     pub fn ticks(&self) -> u64 {
-        let per_scenario = self.replications.saturating_mul(self.variants.len() + 1);
+        let studies = super::studies::SPLINE_CONFIGS.len() + super::studies::RADIUS_CAPS.len();
+        let per_scenario = self
+            .replications
+            .saturating_mul(self.variants.len() + 1)
+            .saturating_add(self.study_replications.saturating_mul(studies));
         per_scenario.saturating_mul(Scenario::ALL.len()) as u64
     }
 
@@ -138,6 +158,16 @@ pub struct ScenarioResult {
     /// The example run's detections, in file order (the row indices of `energies` and
     /// `example` point here).
     pub detections: Vec<DetectionRow>,
+    /// EPF and NNSF under each dynamic-model end behaviour ([`spline_study`]).
+    #[serde(default)]
+    pub splines: Vec<SplineRow>,
+    /// The radius-cap sweep and the terms that decide EPF's wrong associations
+    /// ([`radius_sweep`]).
+    #[serde(default)]
+    pub radius: RadiusSweep,
+    /// Eq. (1) term by term at the first frame where EPF goes wrong ([`first_wrong_frame`]).
+    #[serde(default)]
+    pub wrong_frame: Option<WrongFrame>,
 }
 
 impl ScenarioResult {
@@ -272,6 +302,30 @@ fn scenario(
         tick,
     )?;
 
+    let study = ScenarioConfig::new(s);
+    let splines = spline_study(
+        study,
+        &tracker,
+        cfg.study_replications,
+        scenario_seed.wrapping_add(950),
+        cfg.par,
+        tick,
+    )?;
+    let radius = radius_sweep(
+        study,
+        &tracker,
+        cfg.study_replications,
+        scenario_seed.wrapping_add(970),
+        cfg.par,
+        tick,
+    )?;
+    let wrong_frame = first_wrong_frame(
+        study,
+        &tracker,
+        cfg.study_replications,
+        scenario_seed.wrapping_add(990),
+    )?;
+
     let shown = [Method::Epf, Method::Nnsf];
     let rec = rec_curves(&comparisons[0], &shown, cfg.rec_points)?;
 
@@ -312,6 +366,9 @@ fn scenario(
         rec,
         energies,
         example,
+        splines,
+        radius,
+        wrong_frame,
         frames: sim.frames,
         truth: sim.truth,
         detections: sim
