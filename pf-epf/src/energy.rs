@@ -460,4 +460,26 @@ mod tests {
         assert!((on[0] - 1.0).abs() < 1e-12);
         assert!((off[0] - 2f64.sqrt()).abs() < 1e-12);
     }
+
+    /// The α normalisation is relative among targets: where a component is 0 for every
+    /// target but one (here E³, for a straight target and a turning one), that one gets
+    /// α_l E^l = 1 whatever the size of its E^l, for every detection that keeps the straight
+    /// target straight, its own included. This is the limit the report's term-by-term
+    /// tables show deciding wrong associations.
+    #[test]
+    fn a_component_nonzero_for_one_target_only_weighs_one_whatever_its_size() {
+        let v = Vec2::new;
+        let turning = geometry([v(0.0, 0.0), v(1.0, 0.0), v(2.0, 0.6)], 1.0);
+        let straight = geometry([v(0.0, 5.0), v(1.0, 5.0), v(2.0, 5.0)], 1.0);
+        let ys = [v(3.0, 5.0), v(3.5, 5.0)];
+        let mut m = EnergyMatrix::new();
+        m.compute(&[turning, straight], &ys, &EnergyConfig::default());
+        let (a, b) = (m.terms(0, 0), m.terms(0, 1));
+        assert!(a.raw[2] > 0.0 && b.raw[2] > 0.0 && a.raw[2] != b.raw[2]);
+        for j in 0..2 {
+            assert_eq!(m.raw(1, j)[2], 0.0, "the straight target's E³");
+            assert_eq!(m.weighted(0, j)[2], 1.0, "α₃E³ of the turning target");
+            assert_eq!(m.weighted(1, j)[2], 0.0);
+        }
+    }
 }
