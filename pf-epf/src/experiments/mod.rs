@@ -157,6 +157,8 @@ pub fn tracker_for(scenario: Scenario) -> TrackerConfig {
     c.q = match scenario {
         Scenario::VanPlane | Scenario::WalkingMen => 0.3,
         Scenario::Ants => 1.0,
+        Scenario::Crossing | Scenario::SimultaneousTurns => 0.3,
+        Scenario::SparseAnts => 1.0,
     };
     c
 }

@@ -231,6 +231,7 @@ pub fn paper_energies(s: Scenario) -> Vec<Vec<f64>> {
         .iter()
         .map(|r| r.iter().map(|v| v / 100.0).collect())
         .collect(),
+        Scenario::Crossing | Scenario::SparseAnts | Scenario::SimultaneousTurns => Vec::new(),
     }
 }
 

@@ -162,6 +162,7 @@ fn title(s: Scenario) -> &'static str {
         Scenario::VanPlane => "Van–plane",
         Scenario::WalkingMen => "Walking men",
         Scenario::Ants => "Ants",
+        s => s.title(),
     }
 }
 
@@ -170,6 +171,7 @@ fn fig_no(s: Scenario) -> u8 {
         Scenario::VanPlane => 2,
         Scenario::WalkingMen => 3,
         Scenario::Ants => 4,
+        _ => 0,
     }
 }
 
@@ -437,6 +439,7 @@ fn energy_table(r: &ScenarioResult) -> Table {
                 Scenario::VanPlane => "Section 4 equations for Fig. 2",
                 Scenario::WalkingMen => "Table 1",
                 Scenario::Ants => "Table 2 (printed there ×100)",
+                _ => "tables",
             },
             smallest_e_text(&r.smallest_e()),
         ),
