@@ -23,6 +23,8 @@
 //! | | the dynamic-model study, every configuration | [`compare()`] with `c = s + 1000·k + 950` |
 //! | | the radius-cap sweep, replication `r`, every cap | simulation `(s + 1000·k + 970, r)`, tracking `(s + 1000·k + 971, r)` |
 //! | | the search for a wrong frame, run `r` | simulation `(s + 1000·k + 990, r)`, tracking `(s + 1000·k + 991, r)` |
+//! | [`section4()`], stress scene `i` (index in [`Scenario::STRESS`]), `k = 3 + i` | the 2 × 2 comparison | [`compare()`] with `c = s + 1000·k` |
+//! | | the dynamic-model study, the default cap's counts, the wrong frame | as for a scenario: `+ 950`, `+ 970`, `+ 990` |
 //! | | the example run's simulation | `(s, 50 + k)` |
 //! | | each example track, and the energies at the key frame | `(s, 60 + k)`, afresh for each |
 //!
@@ -38,8 +40,8 @@ mod studies;
 pub use comparison::{Comparison, ComparisonConfig, MethodSummary, compare, compare_with_progress};
 pub use section4::{
     DetectionRow, NotSmallest, PairedLoss, ScenarioResult, Section4Config, Section4Result,
-    SmallestE, TargetRec, paired_loss, paper_energies, section4, section4_with_progress,
-    smallest_e,
+    SmallestE, StressResult, TargetRec, paired_loss, paper_energies, section4,
+    section4_with_progress, smallest_e,
 };
 pub use studies::{
     DecisiveTerms, RADIUS_CAPS, RadiusRow, RadiusSweep, SPLINE_CONFIGS, SplineRow, TermRow,

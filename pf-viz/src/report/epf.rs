@@ -17,8 +17,9 @@
 //!   term by term at the first frame where EPF goes wrong.
 
 use pf_epf::experiments::{
-    Comparison, Method, NotSmallest, PairedLoss, ScenarioResult, Section4Config, SmallestE,
-    WrongFrame, paper_energies, section4_with_progress,
+    Comparison, DecisiveTerms, Method, NotSmallest, PairedLoss, RadiusSweep, ScenarioResult,
+    Section4Config, SmallestE, SplineRow, StressResult, WrongFrame, paper_energies,
+    section4_with_progress,
 };
 use pf_epf::scenario::Scenario;
 use pf_epf::tracker::TrackerConfig;
@@ -54,6 +55,28 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     for s in &result.scenarios {
         scenario_report(ctx, &cfg, s, &mut report)?;
     }
+    let splines: Vec<(Scenario, &[SplineRow])> = result
+        .scenarios
+        .iter()
+        .map(|r| (r.scenario, r.splines.as_slice()))
+        .collect();
+    report
+        .tables
+        .push(spline_table("dynamics", &splines, cfg.study_replications));
+    let radius: Vec<(Scenario, &RadiusSweep)> = result
+        .scenarios
+        .iter()
+        .map(|r| (r.scenario, &r.radius))
+        .collect();
+    if let Some(r) = result.scenarios.first() {
+        report.tables.push(radius_table(
+            "radius-cap",
+            &radius,
+            default_cap(&r.ablation),
+            cfg.study_replications,
+        ));
+    }
+    stress_report(&result.stress, cfg.stress_replications, &mut report);
     notes(&result.scenarios, &mut report);
     if ctx.write_rrd() {
         #[cfg(feature = "rrd")]
@@ -149,8 +172,6 @@ fn scenario_report(
     report.tables.push(energy_table(r));
     report.tables.push(error_table(s, &r.comparisons));
     report.tables.push(ablation_table(s, &r.ablation));
-    report.tables.push(spline_table(r, cfg.study_replications));
-    report.tables.push(radius_table(r, cfg.study_replications));
     if let Some(w) = &r.wrong_frame {
         report.tables.push(terms_table(s, w));
     }
@@ -515,6 +536,44 @@ fn error_table(s: Scenario, comparisons: &[Comparison]) -> Table {
     }
 }
 
+/// The stress scenes' tables: the 2 × 2s, the dynamic models, the default cap's counts,
+/// and eq. (1) term by term on the simultaneous turns.
+fn stress_report(stress: &[StressResult], reps: usize, report: &mut SectionReport) {
+    let Some(first) = stress.first() else {
+        return;
+    };
+    report.tables.push(stress_table(stress, reps));
+    let splines: Vec<(Scenario, &[SplineRow])> = stress
+        .iter()
+        .map(|st| (st.scenario, st.splines.as_slice()))
+        .collect();
+    report
+        .tables
+        .push(spline_table("stress-dynamics", &splines, reps));
+    let radius: Vec<(Scenario, &RadiusSweep)> =
+        stress.iter().map(|st| (st.scenario, &st.radius)).collect();
+    report.tables.push(radius_table(
+        "stress-radius-cap",
+        &radius,
+        default_cap(&first.comparison),
+        reps,
+    ));
+    for st in stress {
+        if let Some(w) = st
+            .wrong_frame
+            .as_ref()
+            .filter(|_| st.scenario == Scenario::SimultaneousTurns)
+        {
+            report.tables.push(terms_table(st.scenario, w));
+        }
+    }
+}
+
+/// The radius cap the comparison's tracker used.
+fn default_cap(c: &Comparison) -> f64 {
+    c.config.tracker.energy.radius_cap
+}
+
 /// `0.123 ± 0.004` from a (mean, standard error) pair.
 fn rate(m: (f64, f64)) -> String {
     format!("{:.3} ± {:.3}", m.0, m.1)
@@ -563,14 +622,13 @@ fn headline_table(s: Scenario, c: &Comparison) -> Table {
     }
 }
 
-fn spline_table(r: &ScenarioResult, reps: usize) -> Table {
-    let s = r.scenario;
-    let rows = r
-        .splines
-        .iter()
-        .enumerate()
-        .map(|(i, row)| {
-            vec![
+/// The dynamic-model study of several scenes in one table, `id` its identifier.
+fn spline_table(id: &str, scenes: &[(Scenario, &[SplineRow])], reps: usize) -> Table {
+    let mut rows = Vec::new();
+    for (s, splines) in scenes {
+        for (i, row) in splines.iter().enumerate() {
+            rows.push(vec![
+                title(*s).to_owned(),
                 format!(
                     "{}{}",
                     row.spline.name(),
@@ -580,24 +638,24 @@ fn spline_table(r: &ScenarioResult, reps: usize) -> Table {
                 rate(row.epf),
                 rate(row.nnsf),
                 format!("{:.2} ± {:.2}", row.epf_rmse.0, row.epf_rmse.1),
-            ]
-        })
-        .collect();
+            ]);
+        }
+    }
     Table {
-        id: format!("{}-dynamics", s.name()),
+        id: id.to_owned(),
         caption: format!(
-            "{}: the dynamic model of EPF step 2, estimated from the last three associated \
+            "The dynamic model of EPF step 2, estimated from the last three associated \
              detections: the uniform cubic B-spline on them (the paper's), the chord (linear) \
              or the quadratic through them. \"particles\" moves the particles and centres the \
              gates; \"E²\" gives E²'s predictions Â₁(t+1), Â₂(t+1). Association error rates \
-             and EPF's RMSE, mean ± standard error over the same {reps} simulations of the \
-             clean scenario for every row. On evenly spaced frames the B-spline's velocity and \
+             and EPF's RMSE, mean ± standard error over the same {reps} simulations of each \
+             clean scene for every row. On evenly spaced frames the B-spline's velocity and \
              acceleration, carried to the last detection, extrapolate exactly the quadratic's \
-             displacement (7 times the chord's detection-noise variance one step ahead); they \
-             differ on uneven frames.",
-            title(s)
+             displacement (7 times the chord's detection-noise variance one step ahead), and \
+             the B-spline and the quadratic give E² the same predictions; they differ on \
+             uneven frames (the ants)."
         ),
-        header: ["particles", "E²", "EPF", "NNSF", "EPF RMSE"]
+        header: ["scene", "particles", "E²", "EPF", "NNSF", "EPF RMSE"]
             .iter()
             .map(|s| s.to_string())
             .collect(),
@@ -605,15 +663,27 @@ fn spline_table(r: &ScenarioResult, reps: usize) -> Table {
     }
 }
 
-fn radius_table(r: &ScenarioResult, reps: usize) -> Table {
-    let s = r.scenario;
-    let default_cap = r.ablation.config.tracker.energy.radius_cap;
-    let rows = r
-        .radius
-        .rows
-        .iter()
-        .map(|row| {
-            vec![
+/// `α₁E¹ 114, α₂E² 22, α₃E³ 2 of 138`.
+fn decisive_text(d: &DecisiveTerms) -> String {
+    format!(
+        "α₁E¹ {}, α₂E² {}, α₃E³ {} of {}",
+        d.by_term[0], d.by_term[1], d.by_term[2], d.wrong
+    )
+}
+
+/// The radius-cap sweep of several scenes in one table.
+fn radius_table(
+    id: &str,
+    scenes: &[(Scenario, &RadiusSweep)],
+    default_cap: f64,
+    reps: usize,
+) -> Table {
+    let mut rows = Vec::new();
+    let mut decisive = Vec::new();
+    for (s, radius) in scenes {
+        for row in &radius.rows {
+            rows.push(vec![
+                title(*s).to_owned(),
                 format!(
                     "{}{}",
                     if row.radius_cap >= 1e5 {
@@ -632,35 +702,82 @@ fn radius_table(r: &ScenarioResult, reps: usize) -> Table {
                 format!("{:.2} %", 100.0 * row.e3_decides),
                 format!("{:.2} %", 100.0 * row.e2_decides),
                 rate(row.error_rate),
-            ]
-        })
-        .collect();
-    let d = &r.radius.decisive;
+            ]);
+        }
+        decisive.push(format!(
+            "{}: {}",
+            title(*s),
+            decisive_text(&radius.decisive)
+        ));
+    }
     Table {
-        id: format!("{}-radius-cap", s.name()),
+        id: id.to_owned(),
         caption: format!(
-            "{}: when E³ is zero. A circumcircle whose radius exceeds radius_cap × its \
-             triangle's longest side counts as a straight line, so a path turning by less \
-             than asin(1/(2·radius_cap)) between Â(t−2), Â(t−1), Â(t) has E³ = 0 (and S₁ = \
-             0 in E²). Per cap, over {reps} EPF runs of the clean scenario: the share of \
+            "When E³ is zero. A circumcircle whose radius exceeds radius_cap × its triangle's \
+             longest side counts as a straight line, so a path turning by less than \
+             asin(1/(2·radius_cap)) between Â(t−2), Â(t−1), Â(t) has E³ = 0 (and S₁ = 0 in \
+             E²). Per cap, over {reps} EPF runs of each clean scene: the share of \
              target-frames with E³ ≠ 0, the share whose association changes when E³ (or E²) \
-             is left out of eq. (1) on the same frame, and EPF's error rate. Of EPF's {} \
-             wrong associations at the default cap, the term that pushed most towards the \
-             wrong target (largest excess of (α_l E^l)² on the true target) was α₁E¹ in {}, \
-             α₂E² in {}, α₃E³ in {}.",
-            title(s),
-            d.wrong,
-            d.by_term[0],
-            d.by_term[1],
-            d.by_term[2]
+             is left out of eq. (1) on the same frame, and EPF's error rate. The term that \
+             pushed each of EPF's wrong associations at the default cap most towards the \
+             wrong target (largest excess of (α_l E^l)² on the true target): {}.",
+            decisive.join("; ")
         ),
         header: [
+            "scene",
             "radius cap",
             "straight below",
             "E³ ≠ 0",
             "E³ decides",
             "E² decides",
             "EPF error rate",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect(),
+        rows,
+    }
+}
+
+/// The stress scenes' 2 × 2s in one table, a row per scene.
+fn stress_table(stress: &[StressResult], reps: usize) -> Table {
+    let rows = stress
+        .iter()
+        .map(|st| {
+            let get = |m: Method| {
+                st.comparison
+                    .methods
+                    .iter()
+                    .find(|x| x.method == m)
+                    .map_or("–".to_owned(), |x| rate(x.error_rate_mean))
+            };
+            vec![
+                title(st.scenario).to_owned(),
+                get(Method::Epf),
+                get(Method::Nnsf),
+                get(Method::EpfGlobal),
+                get(Method::NnGlobal),
+                get(Method::NnPrevious),
+            ]
+        })
+        .collect();
+    Table {
+        id: "stress-headline".into(),
+        caption: format!(
+            "The stress scenes (pf_epf::scenario: crossing at 30° with detection noise sd 1, \
+             six ants seen every 5th frame, three targets turning at the same frames): \
+             association error rate, mean ± standard error over {reps} runs, for the 2 × 2 of \
+             rule (eq. (1) per measurement, global assignment) × cost (E, distance to Â(t)) \
+             and nearest neighbour to Â(t−1). Same tracker settings as the paper's scenes \
+             (tracker_for)."
+        ),
+        header: [
+            "scene",
+            "EPF (eq. (1), E)",
+            "NNSF (eq. (1), Â(t))",
+            "global, E",
+            "global, Â(t)",
+            "NN to Â(t−1)",
         ]
         .iter()
         .map(|s| s.to_string())
