@@ -353,7 +353,13 @@ fn stress_scene(
         cfg.par,
         tick,
     )?;
-    let wrong_frame = first_wrong_frame(study, &tracker, reps, seed.wrapping_add(990))?;
+    let wrong_frame = first_wrong_frame(
+        study,
+        &tracker,
+        cfg.study_replications.saturating_mul(2),
+        seed.wrapping_add(990),
+        s.key_frame(),
+    )?;
     Ok(StressResult {
         scenario: s,
         comparison,
@@ -421,8 +427,9 @@ fn scenario(
     let wrong_frame = first_wrong_frame(
         study,
         &tracker,
-        cfg.study_replications,
+        cfg.study_replications.saturating_mul(2),
         scenario_seed.wrapping_add(990),
+        s.key_frame(),
     )?;
 
     let shown = [Method::Epf, Method::Nnsf];

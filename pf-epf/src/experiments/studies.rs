@@ -289,10 +289,13 @@ pub struct TermRow {
     pub assigned: bool,
 }
 
-/// Eq. (1) term by term at the first frame of a run where EPF gives a target another
-/// target's detection.
+/// Eq. (1) term by term at the first frame, at or after a given frame, where EPF gives a
+/// target another target's detection in a run that had associated every detection right
+/// until that frame.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct WrongFrame {
+    /// Whether every association before `from_frame` was right in this run.
+    pub clean_before: bool,
     /// The replication searched up to and found in.
     pub replication: usize,
     /// The frame `t`.
@@ -304,8 +307,11 @@ pub struct WrongFrame {
 }
 
 /// Search runs `r = 0, 1, …, max_runs − 1` (simulation stream `(seed, r)`, tracking
-/// `(seed + 1, r)`) for the first frame where EPF gives a target another target's
-/// detection, and return eq. (1) there term by term; `None` if no run goes wrong.
+/// `(seed + 1, r)`) for the first frame `t ≥ from_frame` where EPF gives a target another
+/// target's detection, in a run whose associations before `from_frame` were all right (a
+/// run that goes wrong earlier is passed over), and return eq. (1) there term by term;
+/// if none does, the first such frame in any run (`clean_before` says which); `None` if no
+/// run goes wrong from `from_frame` on.
 ///
 /// # Errors
 /// A simulation or filter error.
@@ -314,6 +320,25 @@ pub fn first_wrong_frame(
     tracker: &TrackerConfig,
     max_runs: usize,
     seed: u64,
+    from_frame: i64,
+) -> Result<Option<WrongFrame>> {
+    for clean in [true, false] {
+        if let Some(w) = search_wrong_frame(scenario, tracker, max_runs, seed, from_frame, clean)? {
+            return Ok(Some(w));
+        }
+    }
+    Ok(None)
+}
+
+/// [`first_wrong_frame`]'s search, passing over runs that go wrong before `from_frame` when
+/// `clean`.
+fn search_wrong_frame(
+    scenario: ScenarioConfig,
+    tracker: &TrackerConfig,
+    max_runs: usize,
+    seed: u64,
+    from_frame: i64,
+    clean: bool,
 ) -> Result<Option<WrongFrame>> {
     let cfg = Method::Epf.configure(tracker);
     for r in 0..max_runs {
@@ -336,6 +361,16 @@ pub fn first_wrong_frame(
                 .iter()
                 .enumerate()
                 .any(|(i, o)| o.is_some_and(|j| source(j).is_some_and(|s| s != t.ids()[i])));
+            if f < from_frame {
+                let right = out
+                    .iter()
+                    .enumerate()
+                    .all(|(i, o)| *o == (0..ys.len()).find(|&j| source(j) == Some(t.ids()[i])));
+                if right || !clean {
+                    continue;
+                }
+                break;
+            }
             if !wrong {
                 continue;
             }
@@ -361,6 +396,7 @@ pub fn first_wrong_frame(
                 .map(|g| [heading(g.a_tm2, g.a_tm1), heading(g.a_tm1, g.a_t)])
                 .collect();
             return Ok(Some(WrongFrame {
+                clean_before: clean,
                 replication: r,
                 frame: f,
                 rows: rows_out,

@@ -822,8 +822,9 @@ fn terms_table(s: Scenario, w: &WrongFrame) -> Table {
     Table {
         id: format!("{}-terms", s.name()),
         caption: format!(
-            "{}: eq. (1) term by term at frame {} of run {} of the study, the first frame where \
-             EPF gives a target another target's detection; gated pairs only. Each term reads \
+            "{}: eq. (1) term by term at frame {} of run {} of the search, the first frame from \
+             the key frame t = {} on where EPF gives a target another target's detection, in \
+             the first run that {}; gated pairs only. Each term reads \
              E^l / Σ_k E^l(k, y_j) = α_l E^l (the sum over all targets, as eq. (1) writes α_l); \
              \"d to Â(t)\" is the NNSF's Mahalanobis distance; the last column marks EPF's \
              association. Turn of each target's predicted path between (Â(t−2), Â(t−1)) and \
@@ -831,6 +832,12 @@ fn terms_table(s: Scenario, w: &WrongFrame) -> Table {
             title(s),
             w.frame,
             w.replication,
+            s.key_frame(),
+            if w.clean_before {
+                "associated every detection right before t"
+            } else {
+                "goes wrong from t on (no run searched associated every detection right before t)"
+            },
             turns.join(", ")
         ),
         header: [
