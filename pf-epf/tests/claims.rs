@@ -154,3 +154,41 @@ fn section4_is_the_same_on_any_thread_count() {
         }
     }
 }
+
+/// Eq. (1) term by term at a frame where EPF goes wrong: the table holds a target given
+/// another target's detection, that detection's E is the least among the targets gating it
+/// (the per-measurement rule), and every row's terms recompose E.
+#[test]
+fn the_wrong_frame_table_recomposes_eq_1() {
+    use pf_epf::experiments::{first_wrong_frame, tracker_for};
+    let s = Scenario::WalkingMen;
+    let mut tracker = tracker_for(s);
+    tracker.n_particles = 100;
+    let w = first_wrong_frame(ScenarioConfig::new(s), &tracker, 50, 3, s.key_frame())
+        .unwrap()
+        .expect("EPF goes wrong in one of 50 walking-men runs");
+    assert!(w.frame >= s.key_frame());
+    let wrong = w
+        .rows
+        .iter()
+        .find(|r| r.assigned && r.source >= 0 && r.source != r.target)
+        .expect("a target given another target's detection");
+    for r in w
+        .rows
+        .iter()
+        .filter(|r| r.source == wrong.source && r.gated)
+    {
+        assert!(
+            wrong.terms.e <= r.terms.e,
+            "eq. (1): {wrong:?} against {r:?}"
+        );
+    }
+    for r in &w.rows {
+        let t = &r.terms;
+        for l in 0..3 {
+            assert!((t.weighted[l] - (t.alpha[l] * t.raw[l]).min(1.0)).abs() < 1e-12);
+        }
+        let e = (t.weighted.iter().map(|x| x * x).sum::<f64>() / 3.0).sqrt();
+        assert!((t.e - e).abs() < 1e-12);
+    }
+}
