@@ -15,17 +15,17 @@
 //!
 //! | name | rule | cost | paper |
 //! |---|---|---|---|
-//! | `energy` ([`Association::Energy`]) | per measurement | `E(k, y_j)`, eq. (1) | the EPF |
-//! | `energy_global` ([`Association::EnergyGlobal`]) | global | `E`, a miss costs [`MISS_COST`] | |
+//! | `energy_per_measurement` ([`Association::EnergyPerMeasurement`]) | per measurement | `E(k, y_j)`, eq. (1) | the EPF |
+//! | `energy` ([`Association::Energy`], the tracker's default) | global | `E`, a miss costs [`MISS_COST`] | the abstract's "global minimization of an energy" |
 //! | `nn` ([`Association::Nearest`]) | per measurement | Mahalanobis distance to `Â(t)` | the NNSF: "the closest validate measurement to a predicted target" (Li & Bar-Shalom 1996) |
 //! | `nn_global` ([`Association::NearestGlobal`]) | global | squared Mahalanobis distance to `Â(t)`, a miss costs `2γ` | global nearest neighbour |
 //! | `nn_previous` ([`Association::NearestPrevious`]) | per measurement | Mahalanobis distance to `Â(t−1)`, E¹'s | Section 4's "NNSF would associate M₂ to T₁" |
 //!
 //! `nn_previous` is kept because it is the distance under which Section 4's examples make
 //! NNSF fail (the detection is judged by where the targets were, as `α₁E¹` is), and because
-//! it is `energy` with E² and E³ left out up to the normalisation, which isolates what the
-//! two geometric energies add. `energy_per_measurement` is accepted as another name of
-//! `energy`.
+//! it is `energy_per_measurement` with E² and E³ left out up to the normalisation, which
+//! isolates what the two geometric energies add. `energy` keeps the meaning it had (the
+//! global assignment on E): it is the better of the two rules on every scene of the report.
 
 use crate::assignment::Hungarian;
 use crate::energy::{EnergyConfig, EnergyMatrix, TargetGeometry};
@@ -46,13 +46,13 @@ const FORBIDDEN: f64 = 1e9;
 /// How detections are associated with targets: a rule and a cost (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Association {
-    /// Eq. (1): each measurement to the gated target of least energy (the paper's EPF).
+    /// Global energy minimisation (optimal assignment on the E matrix); the default.
     #[default]
-    #[serde(rename = "energy", alias = "energy_per_measurement")]
+    #[serde(rename = "energy")]
     Energy,
-    /// Global energy minimisation (optimal assignment on the E matrix).
-    #[serde(rename = "energy_global")]
-    EnergyGlobal,
+    /// Eq. (1): each measurement to the gated target of least energy (the paper's EPF).
+    #[serde(rename = "energy_per_measurement")]
+    EnergyPerMeasurement,
     /// The nearest-neighbour standard filter: each measurement to the gated target whose
     /// prediction `Â(t)` is nearest.
     #[serde(rename = "nn")]
@@ -81,7 +81,7 @@ impl Association {
     /// Every method.
     pub const ALL: [Association; 5] = [
         Association::Energy,
-        Association::EnergyGlobal,
+        Association::EnergyPerMeasurement,
         Association::Nearest,
         Association::NearestGlobal,
         Association::NearestPrevious,
@@ -91,7 +91,7 @@ impl Association {
     pub fn name(self) -> &'static str {
         match self {
             Association::Energy => "energy",
-            Association::EnergyGlobal => "energy_global",
+            Association::EnergyPerMeasurement => "energy_per_measurement",
             Association::Nearest => "nn",
             Association::NearestGlobal => "nn_global",
             Association::NearestPrevious => "nn_previous",
@@ -100,13 +100,13 @@ impl Association {
 
     /// Whether the rule is the global assignment (otherwise per measurement, eq. (1)).
     pub fn is_global(self) -> bool {
-        matches!(self, Association::EnergyGlobal | Association::NearestGlobal)
+        matches!(self, Association::Energy | Association::NearestGlobal)
     }
 
     /// The cost the rule minimises.
     pub fn cost(self) -> Cost {
         match self {
-            Association::Energy | Association::EnergyGlobal => Cost::Energy,
+            Association::Energy | Association::EnergyPerMeasurement => Cost::Energy,
             Association::Nearest | Association::NearestGlobal => Cost::DistancePredicted,
             Association::NearestPrevious => Cost::DistancePrevious,
         }
@@ -116,9 +116,6 @@ impl Association {
 impl std::str::FromStr for Association {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
-        if s.eq_ignore_ascii_case("energy_per_measurement") {
-            return Ok(Association::Energy);
-        }
         pf_core::names::parse_name("association", &Association::ALL, Association::name, s)
     }
 }
@@ -335,7 +332,7 @@ mod tests {
         // The energies, and nearest neighbour to the predictions Â(t), are right.
         for m in [
             Association::Energy,
-            Association::EnergyGlobal,
+            Association::EnergyPerMeasurement,
             Association::Nearest,
             Association::NearestGlobal,
         ] {
@@ -369,7 +366,7 @@ mod tests {
         );
         for m in [
             Association::Energy,
-            Association::EnergyGlobal,
+            Association::EnergyPerMeasurement,
             Association::Nearest,
             Association::NearestGlobal,
         ] {
@@ -417,16 +414,12 @@ mod tests {
     }
 
     #[test]
-    fn names_parse_and_the_old_name_stays() {
+    fn names_parse_and_serialise_alike() {
         for a in Association::ALL {
             assert_eq!(a.name().parse::<Association>(), Ok(a));
+            let json = serde_json::to_string(&a).unwrap();
+            assert_eq!(json, format!("\"{}\"", a.name()));
         }
-        assert_eq!(
-            "energy_per_measurement".parse::<Association>(),
-            Ok(Association::Energy)
-        );
-        let a: Association = serde_json::from_str("\"energy_per_measurement\"").unwrap();
-        assert_eq!(a, Association::Energy);
     }
 
     #[test]

@@ -164,6 +164,9 @@ fn the_wrong_frame_table_recomposes_eq_1() {
     let s = Scenario::WalkingMen;
     let mut tracker = tracker_for(s);
     tracker.n_particles = 100;
+    // The paper's one-round association (re-acquisition lets targets without a detection
+    // at their previous step choose second, among the detections left).
+    tracker.reacquire = false;
     let w = first_wrong_frame(ScenarioConfig::new(s), &tracker, 50, 3, s.key_frame())
         .unwrap()
         .expect("EPF goes wrong in one of 50 walking-men runs");

@@ -34,6 +34,7 @@
 //! `R` > 50. They are kept so that the report's numbers stay as published.
 
 mod comparison;
+pub mod scenes;
 mod section4;
 mod studies;
 
@@ -58,7 +59,7 @@ use serde::{Deserialize, Serialize};
 #[serde(rename_all = "snake_case")]
 pub enum Method {
     /// The paper's EPF: eq. (1), each measurement to the target of least energy
-    /// ([`Association::Energy`]).
+    /// ([`Association::EnergyPerMeasurement`]).
     Epf,
     /// The same as [`Method::Epf`] (the name of the per-measurement rule when EPF meant the
     /// global assignment; kept so that configs naming it still read).
@@ -75,7 +76,8 @@ pub enum Method {
     EpfWithoutE3,
     /// EPF with E¹ alone (ablation).
     EpfE1Only,
-    /// The energy E under the global one-to-one assignment ([`Association::EnergyGlobal`]).
+    /// The energy E under the global one-to-one assignment ([`Association::Energy`], the
+    /// tracker's default).
     EpfGlobal,
     /// The distance to `Â(t)` under the global one-to-one assignment
     /// ([`Association::NearestGlobal`]).
@@ -127,9 +129,9 @@ impl Method {
             | Method::EpfArgmin
             | Method::EpfWithoutE2
             | Method::EpfWithoutE3
-            | Method::EpfE1Only => Association::Energy,
+            | Method::EpfE1Only => Association::EnergyPerMeasurement,
             Method::Nnsf | Method::NnPredicted => Association::Nearest,
-            Method::EpfGlobal => Association::EnergyGlobal,
+            Method::EpfGlobal => Association::Energy,
             Method::NnGlobal => Association::NearestGlobal,
             Method::NnPrevious => Association::NearestPrevious,
         }

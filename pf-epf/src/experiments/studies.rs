@@ -5,7 +5,7 @@
 use super::{ComparisonConfig, Method, compare_with_progress};
 use crate::association::{Association, Associator, gate_threshold};
 use crate::dynamics::SplineOrder;
-use crate::energy::{EnergyConfig, EnergyTerms};
+use crate::energy::{EnergyConfig, EnergyMatrix, EnergyTerms};
 use crate::error::Result;
 use crate::geometry::Vec2;
 use crate::metrics::association_errors;
@@ -131,7 +131,9 @@ fn instrumented_run(
     let k = t.ids().len();
     let mut counts = Counts::default();
     let mut other = Associator::new();
+    let mut full = vec![None; k];
     let mut alt = vec![None; k];
+    let mut e = EnergyMatrix::new();
     let mut ys = Vec::new();
     let gamma = gate_threshold(cfg.gate_probability)?;
     let mut res = TrackResult {
@@ -143,6 +145,7 @@ fn instrumented_run(
                 target,
                 position: Vec::new(),
                 detection: Vec::new(),
+                status: Vec::new(),
             })
             .collect(),
         records: Vec::new(),
@@ -156,7 +159,17 @@ fn instrumented_run(
                 .map(|d| d.position),
         );
         let out = t.step(f, &ys, rng)?.to_vec();
-        let e = t.associator().energy();
+        // Eq. (1) on every target at once (the tracker may associate in two rounds, see
+        // `tracker`; the counts are of the one-round rule on the same frame).
+        e.compute(t.geometry(), &ys, &cfg.energy);
+        other.associate(
+            t.geometry(),
+            &ys,
+            gamma,
+            Association::EnergyPerMeasurement,
+            &cfg.energy,
+            &mut full,
+        );
         counts.target_frames += k;
         for i in 0..k {
             if (0..ys.len()).any(|j| e.raw(i, j)[2] > 0.0) {
@@ -166,8 +179,15 @@ fn instrumented_run(
         for (l, slot) in [(2, &mut counts.e3_decides), (1, &mut counts.e2_decides)] {
             let mut ec = cfg.energy;
             ec.components[l] = false;
-            other.associate(t.geometry(), &ys, gamma, Association::Energy, &ec, &mut alt);
-            *slot += out.iter().zip(&alt).filter(|(a, b)| a != b).count();
+            other.associate(
+                t.geometry(),
+                &ys,
+                gamma,
+                Association::EnergyPerMeasurement,
+                &ec,
+                &mut alt,
+            );
+            *slot += full.iter().zip(&alt).filter(|(a, b)| a != b).count();
         }
         let source = |j: usize| sim.detections.rows()[rows.start + j].target;
         for (i, o) in out.iter().enumerate() {
@@ -188,6 +208,7 @@ fn instrumented_run(
             let p = t.estimate(i);
             tr.position.push([p.x, p.y]);
             tr.detection.push(out[i].map(|j| rows.start + j));
+            tr.status.push(t.status()[i]);
         }
     }
     Ok((res, counts))
@@ -374,7 +395,9 @@ fn search_wrong_frame(
             if !wrong {
                 continue;
             }
-            let e = t.associator().energy();
+            let mut e = EnergyMatrix::new();
+            e.compute(t.geometry(), &ys, &cfg.energy);
+            let gamma = gate_threshold(cfg.gate_probability)?;
             let m = ys.len();
             let mut rows_out = Vec::with_capacity(t.ids().len() * m);
             for (i, g) in t.geometry().iter().enumerate() {
@@ -382,7 +405,7 @@ fn search_wrong_frame(
                     rows_out.push(TermRow {
                         target: t.ids()[i],
                         source: source(j).unwrap_or(-1),
-                        gated: t.associator().is_gated(i, j, m),
+                        gated: g.mahalanobis_sq(&g.a_t, y) <= gamma,
                         terms: e.terms(i, j),
                         d_predicted: g.mahalanobis_sq(&g.a_t, y).sqrt(),
                         assigned: out[i] == Some(j),
