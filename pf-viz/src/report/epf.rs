@@ -945,8 +945,8 @@ fn notes(scenarios: &[ScenarioResult], report: &mut SectionReport) {
          predictions Â₁(t+1), Â₂(t+1) come from the uniform cubic B-spline whose control \
          points are the last three associated detections (EPF step 2); the particles move \
          with the chord through the last two, because the B-spline's extrapolation from the \
-         last detection is the quadratic's on evenly spaced frames and loses tracks (the \
-         dynamic-model tables). A circumcircle counts as a straight line above {}× its \
+         last detection is the quadratic's on evenly spaced frames and raised the error \
+         rate on five of the six scenes (the dynamic-model tables). A circumcircle counts as a straight line above {}× its \
          triangle's longest side (the radius-cap tables), and E³'s area is floored at {}× \
          the reference triangle's.",
         scenarios
