@@ -44,7 +44,7 @@
 //! frames in a row) or `lost` (longer); a lost track keeps its prediction and its growing
 //! gate and is re-acquired by the first detection that falls in it.
 
-use crate::association::{Association, Associator, gate_threshold};
+use crate::association::{Association, Associator, Cost, gate_threshold};
 use crate::data::{Detections, Init};
 use crate::dynamics::{SplineDynamics, SplineOrder};
 use crate::energy::{EnergyConfig, TargetGeometry};
@@ -78,12 +78,15 @@ pub struct TrackerConfig {
     /// The choices left open in the energies.
     pub energy: EnergyConfig,
     /// End behaviour of the B-spline dynamic model that moves the particles and centres
-    /// the gates (`Â(t)`).
+    /// the gates (`Â(t)`): the chord by default, because the B-spline's (and the
+    /// quadratic's) extrapolation carries 7 times the chord's detection-noise variance one
+    /// step ahead and lost tracks (see the crate README).
     pub spline: SplineOrder,
     /// End behaviour of the model behind E²'s predictions `Â₁(t+1)` and `Â₂(t+1)`. With
     /// [`SplineOrder::Linear`] the triangle `(Â(t−1), y_j, Â₂(t+1))` is always straight
     /// (`Â₂(t+1)` extends the chord through `y_j`), so E² would carry no information; the
-    /// quadratic end gives it the curvature the paper's Fig. 1c–d compares.
+    /// cubic B-spline (the default, EPF step 2) and the quadratic give it the curvature the
+    /// paper's Fig. 1c–d compares.
     pub energy_spline: SplineOrder,
     /// A target without a detection for more than this many tracked frames in a row is
     /// reported [`TrackStatus::Lost`] (up to it, [`TrackStatus::Coasting`]).
@@ -117,7 +120,7 @@ impl Default for TrackerConfig {
             r: 0.5,
             energy: EnergyConfig::default(),
             spline: SplineOrder::Linear,
-            energy_spline: SplineOrder::Quadratic,
+            energy_spline: SplineOrder::CubicBSpline,
             lost_after: 3,
             reacquire: true,
         }
@@ -332,6 +335,16 @@ impl History {
     }
 }
 
+/// Each target's filter (Section 3): `N` particles, multinomial resampling in the adaptive
+/// way, when `N_eff = 1/Σ_n (w_n)²` falls below `ess_fraction · N`.
+pub fn filter_config(cfg: &TrackerConfig) -> FilterConfig {
+    FilterConfig {
+        n_particles: cfg.n_particles,
+        resampler: Resampler::Multinomial,
+        policy: ResamplePolicy::EssBelow(EssThreshold::Fraction(cfg.ess_fraction)),
+    }
+}
+
 /// The multi-target tracker, stepped frame by frame.
 pub struct Tracker {
     cfg: TrackerConfig,
@@ -379,11 +392,7 @@ impl Tracker {
     pub fn new<R: Rng + ?Sized>(init: &Init, cfg: &TrackerConfig, rng: &mut R) -> Result<Self> {
         cfg.validate()?;
         let gamma = gate_threshold(cfg.gate_probability)?;
-        let fc = FilterConfig {
-            n_particles: cfg.n_particles,
-            resampler: Resampler::Multinomial,
-            policy: ResamplePolicy::EssBelow(EssThreshold::Fraction(cfg.ess_fraction)),
-        };
+        let fc = filter_config(cfg);
         let mut targets = Vec::with_capacity(init.targets().len());
         for t in init.targets() {
             let mut dynamics = SplineDynamics::new(cfg.spline);
@@ -862,10 +871,9 @@ pub fn energies_at<R: Rng + ?Sized>(
     ys.clear();
     ys.extend(detections.rows()[rows.clone()].iter().map(|d| d.position));
     let mut energy_cfg = *cfg;
-    energy_cfg.association = match cfg.association {
-        Association::Nearest => Association::Energy,
-        a => a,
-    };
+    if energy_cfg.association.cost() != Cost::Energy {
+        energy_cfg.association = Association::Energy;
+    }
     tracker.cfg = energy_cfg;
     let out = tracker.step(frame, &ys, rng)?.to_vec();
     // The table holds every target against every detection, whatever rounds the step
