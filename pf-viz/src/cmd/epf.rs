@@ -98,8 +98,10 @@ pub struct TrackArgs {
     /// The data and tracker settings.
     #[command(flatten)]
     pub tracker: TrackerArgs,
-    /// energy (EPF, optimal assignment), energy_per_measurement (eq. (1) argmin) or nn
-    /// (NNSF).
+    /// energy (optimal assignment on the energy E, the default), energy_per_measurement
+    /// (eq. (1): each measurement to its least-energy target, the paper's EPF), nn (the
+    /// paper's NNSF: nearest to the prediction Â(t)), nn_global (optimal assignment on the
+    /// distance to Â(t)) or nn_previous (nearest to Â(t−1), what nn meant before).
     #[arg(long, value_name = "METHOD", default_value = "energy")]
     pub association: Association,
     /// A target without a detection for more than this many tracked frames in a row is
