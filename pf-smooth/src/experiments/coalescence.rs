@@ -287,7 +287,7 @@ pub fn coalescence(cfg: &CoalescenceConfig) -> Result<CoalescenceResult> {
             cfg.runs,
             Par::Rayon,
             |_, rng| -> Result<CoalescenceRun> {
-                let mut pf = ParticleFilter::bootstrap(model.clone(), fc)?;
+                let mut pf = ParticleFilter::bootstrap(model, fc)?;
                 let mut log = AncestorLog::with_capacity(n, steps + 1);
                 pf.run(&ys, None, rng, &mut log)?;
                 let (mut alive, mut next) = (vec![false; n], vec![false; n]);
