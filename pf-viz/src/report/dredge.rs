@@ -1,7 +1,9 @@
 //! Report section for Babuška et al.: on-line estimation of overflow losses in a hopper dredger.
 //!
 //! Figures 3–8 of the paper on our simulated cycle, the residual table with the paper's
-//! numbers beside ours, the `N` sweep, and `dredge.rrd`. The experiments are
+//! numbers beside ours and beside the filter's on data from its own model (13), the
+//! consistency table (NEES, and the estimate against the truth of `k` and `k − 1`), the `N`
+//! sweep, and `dredge.rrd`. The experiments are
 //! [`pf_dredge::experiments`]; this file only draws them.
 
 use serde::Serialize;
