@@ -111,10 +111,10 @@ impl Alignment {
                 reason: "the alignment needs at least two samples",
             }));
         }
-        let now: Vec<f64> = (1..n).map(|k| truth[k] - hat[k]).collect();
+        let at_k: Vec<f64> = (1..n).map(|k| truth[k] - hat[k]).collect();
         let before: Vec<f64> = (1..n).map(|k| truth[k - 1] - hat[k]).collect();
         Ok(Alignment {
-            against_k: ResidualSummary::new(&now)?,
+            against_k: ResidualSummary::new(&at_k)?,
             against_k_minus_1: ResidualSummary::new(&before)?,
         })
     }
@@ -127,6 +127,16 @@ pub struct MomentRecorder {
     pub mean: Vec<[f64; 2]>,
     /// `(Var Q_o, Cov, Var ρ_o)` per step.
     pub cov: Vec<[f64; 3]>,
+}
+
+impl MomentRecorder {
+    /// A recorder with room for `steps` steps, so that recording does not allocate.
+    pub fn with_capacity(steps: usize) -> Self {
+        MomentRecorder {
+            mean: Vec::with_capacity(steps),
+            cov: Vec::with_capacity(steps),
+        }
+    }
 }
 
 impl Observer<State> for MomentRecorder {
@@ -332,7 +342,7 @@ fn one_run<R: Rng + ?Sized>(
         q_o: tq,
         rho_o: tr,
     } = model13_data(cycle, from, hold, &model, rng)?;
-    let mut rec = MomentRecorder::default();
+    let mut rec = MomentRecorder::with_capacity(data.len());
     let run = run_filter_observed(&data, filter, rng, &mut rec)?;
     let e = &run.estimates;
     let some = |v: &[f64]| v.iter().copied().map(Some).collect::<Vec<_>>();
