@@ -12,7 +12,9 @@
 //! | [`fig8()`] | Fig. 8: min–max band and mean of 25 runs on the same data |
 //! | [`n_sweep()`] | beyond the paper: residual std against `N` |
 //! | [`best_lag()`], [`flat_stretch()`] | Fig. 5's `ρ_o`: the estimate's delay, and its residual on the flat start |
+//! | [`consistency()`], [`fig5_alignment()`] | beyond the paper: the filter on data from its own model (13) (NEES), and the estimate against the truth of `k` and `k − 1` |
 
+mod consistency;
 mod cycle;
 mod fig5_6;
 mod fig7;
@@ -21,6 +23,10 @@ mod lag;
 mod n_sweep;
 mod online;
 
+pub use consistency::{
+    Alignment, ConsistencyConfig, ConsistencyResult, ConsistencyRun, ConsistencySignal, MeanSe,
+    Model13Data, MomentRecorder, consistency, fig5_alignment, model13_data,
+};
 pub use cycle::{CycleConfig, cycle};
 pub use fig5_6::{Fig56Config, Fig56Result, PaperResiduals, ResidualReport, fig5_6};
 pub use fig7::{Fig7Config, Fig7Result, fig7};

@@ -9,7 +9,13 @@
 //! `pf-viz smooth em|sem|score` contract. Replication `r` (or chain `c`) uses the stream
 //! `(seed, r)`, so results do not depend on the thread count.
 
+mod coalescence;
 mod paper;
+
+pub use coalescence::{
+    AncestorLog, CoalescenceConfig, CoalescenceResult, CoalescenceRow, CoalescenceRun,
+    CoalescenceSetting, QUANTILE_LEVELS, coalescence, coalescence_delay,
+};
 
 pub use paper::{
     Fig1Config, Fig1Result, FixedLagClaim, ForwardReference, SmoothConfig, SmoothResult, Spread,

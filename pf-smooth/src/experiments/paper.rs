@@ -7,17 +7,18 @@
 //! runs under a seed of its own drawn from the seed, so that no two parts share a stream.
 
 use super::{
-    EmConfig, EmResult, LagSweepConfig, LagSweepResult, Observations, Scale, SemConfig, SemResult,
-    em, lag_sweep, sem,
+    CoalescenceConfig, CoalescenceResult, EmConfig, EmResult, LagSweepConfig, LagSweepResult,
+    Observations, Scale, SemConfig, SemResult, coalescence, em, lag_sweep, sem,
 };
 use crate::ar1::{Ar1Data, Theta};
 use crate::em::paper_filter_config;
 use crate::error::Result;
-use pf_core::filter::ParticleFilter;
+use pf_core::filter::{FilterConfig, ParticleFilter};
 use pf_core::genealogy::Genealogy;
 use pf_core::mc::{mean_and_se, stream_rng};
 use pf_core::observe::{CloudRecorder, EssRecorder, GenealogyRecorder};
 use pf_core::params::at_least_one;
+use pf_core::resample::Resampler;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
@@ -48,8 +49,19 @@ pub struct SmoothConfig {
     pub replications: usize,
     /// Particles of Fig. 1 (paper: 50).
     pub genealogy_particles: usize,
-    /// Steps shown in Fig. 1 (the paper does not say; we show the first 100).
+    /// Steps shown in Fig. 1 (the paper does not say; we show all 500, since with Section
+    /// 5's systematic resampling the N = 50 paths have a common ancestor a median 215–230
+    /// steps back: [`CoalescenceResult`]).
     pub genealogy_steps: usize,
+    /// Fig. 1's resampling scheme (Section 5: systematic).
+    #[serde(default)]
+    pub genealogy_resampler: Resampler,
+    /// Steps of the second Fig. 1, with multinomial resampling (the paper's 100-step look).
+    #[serde(default = "default_multinomial_steps")]
+    pub genealogy_multinomial_steps: usize,
+    /// Seeded runs per setting of the coalescence experiment (not in the paper).
+    #[serde(default = "default_coalescence_runs")]
+    pub coalescence_runs: usize,
     /// SEM particles (paper: 25).
     pub sem_particles: usize,
     /// SEM iterations (paper: 50).
@@ -70,6 +82,14 @@ pub struct SmoothConfig {
     /// The seed (the result states it, so the configuration leaves it out of its JSON).
     #[serde(skip)]
     pub seed: u64,
+}
+
+fn default_multinomial_steps() -> usize {
+    100
+}
+
+fn default_coalescence_runs() -> usize {
+    CoalescenceConfig::at_scale(Scale::Default).runs
 }
 
 impl Default for SmoothConfig {
@@ -97,7 +117,10 @@ impl SmoothConfig {
             lag: 20,
             replications,
             genealogy_particles: 50,
-            genealogy_steps: 100,
+            genealogy_steps: 500,
+            genealogy_resampler: Resampler::Systematic,
+            genealogy_multinomial_steps: 100,
+            coalescence_runs: CoalescenceConfig::at_scale(scale).runs,
             sem_particles: 25,
             sem_iterations: 50,
             sem_chains: 4,
@@ -110,10 +133,11 @@ impl SmoothConfig {
         }
     }
 
-    /// How many times [`smooth_with_progress`] ticks: once for Fig. 1, twice per N of
-    /// Fig. 2, once for Fig. 4 and once per N of the sweep.
+    /// How many times [`smooth_with_progress`] ticks: once for Fig. 1, once for the
+    /// coalescence experiment, twice per N of Fig. 2, once for Fig. 4 and once per N of the
+    /// sweep.
     pub fn ticks(&self) -> u64 {
-        (2 + 2 * self.particles.len() + self.sweep_particles.len()) as u64
+        (3 + 2 * self.particles.len() + self.sweep_particles.len()) as u64
     }
 
     /// Check what the parts do not check themselves: at least one N in Fig. 2 and in the
@@ -171,6 +195,11 @@ pub struct SmoothResult {
     pub observations: Vec<f64>,
     /// Fig. 1's genealogy.
     pub genealogy: Fig1Result,
+    /// Fig. 1 with multinomial resampling over `genealogy_multinomial_steps` steps.
+    pub genealogy_multinomial: Fig1Result,
+    /// The coalescence delay over seeded runs (not in the paper): why Fig. 1 looks as it
+    /// does.
+    pub coalescence: CoalescenceResult,
     /// Fig. 2 at `n_short`, per N.
     pub fig2_short: Vec<UpdateRuns>,
     /// Figs. 2 and 3 at `n`, per N (joint and fixed-lag from the same particles).
@@ -224,9 +253,30 @@ pub fn smooth_with_progress(cfg: &SmoothConfig, tick: &(dyn Fn() + Sync)) -> Res
             theta: cfg.truth,
             particles: cfg.genealogy_particles,
             steps: cfg.genealogy_steps,
+            resampler: cfg.genealogy_resampler,
             seed: sub_seed(seed, 1),
         },
     )?;
+    let genealogy_multinomial = fig1_on(
+        &data,
+        xs.as_deref(),
+        &Fig1Config {
+            data: Observations::Given(Vec::new()),
+            theta: cfg.truth,
+            particles: cfg.genealogy_particles,
+            steps: cfg.genealogy_multinomial_steps,
+            resampler: Resampler::Multinomial,
+            seed: sub_seed(seed, 2),
+        },
+    )?;
+    tick();
+    let coalescence_result = coalescence(&CoalescenceConfig {
+        data: Observations::Given(data.y().to_vec()),
+        particles: cfg.genealogy_particles,
+        runs: cfg.coalescence_runs,
+        seed: sub_seed(seed, 3),
+        ..CoalescenceConfig::at_scale(Scale::Default)
+    })?;
     tick();
 
     let s = cfg.start;
@@ -286,6 +336,8 @@ pub fn smooth_with_progress(cfg: &SmoothConfig, tick: &(dyn Fn() + Sync)) -> Res
         seed,
         observations: data.y().to_vec(),
         genealogy,
+        genealogy_multinomial,
+        coalescence: coalescence_result,
         fig2_short,
         fig2_long,
         sem: sem_result,
@@ -304,8 +356,11 @@ pub struct Fig1Config {
     pub theta: Theta,
     /// Particles N (paper: 50).
     pub particles: usize,
-    /// Steps shown (the paper does not say; the first 100).
+    /// Steps shown (the paper does not say; all 500 of Section 5's data).
     pub steps: usize,
+    /// The resampling scheme, at every step (Section 5: systematic).
+    #[serde(default)]
+    pub resampler: Resampler,
     /// Seed: the filter runs on the stream `(seed, 0)`.
     pub seed: u64,
 }
@@ -324,7 +379,8 @@ impl Fig1Config {
             data: Observations::paper(0),
             theta: Theta::paper_truth(),
             particles: 50,
-            steps: 100,
+            steps: 500,
+            resampler: Resampler::Systematic,
             seed: 0,
         }
     }
@@ -371,7 +427,11 @@ pub fn fig1(cfg: &Fig1Config) -> Result<Fig1Result> {
 fn fig1_on(data: &Ar1Data, xs: Option<&[f64]>, cfg: &Fig1Config) -> Result<Fig1Result> {
     let d = data.prefix(cfg.steps.min(data.n()))?;
     let model = cfg.theta.model(d.y()[0])?;
-    let mut pf = ParticleFilter::bootstrap(model, paper_filter_config(cfg.particles))?;
+    let fc = FilterConfig {
+        resampler: cfg.resampler,
+        ..paper_filter_config(cfg.particles)
+    };
+    let mut pf = ParticleFilter::bootstrap(model, fc)?;
     let mut obs = (
         CloudRecorder::new(),
         GenealogyRecorder::new(),

@@ -1,7 +1,9 @@
 //! Report section for Babuška et al.: on-line estimation of overflow losses in a hopper dredger.
 //!
 //! Figures 3–8 of the paper on our simulated cycle, the residual table with the paper's
-//! numbers beside ours, the `N` sweep, and `dredge.rrd`. The experiments are
+//! numbers beside ours and beside the filter's on data from its own model (13), the
+//! consistency table (NEES, and the estimate against the truth of `k` and `k − 1`), the `N`
+//! sweep, and `dredge.rrd`. The experiments are
 //! [`pf_dredge::experiments`]; this file only draws them.
 
 use serde::Serialize;
@@ -12,8 +14,9 @@ use crate::png::histogram::{self, HistData, HistPanel, HistStats, HistogramPlot}
 use crate::png::line::{self, Band, LinePlot, Series};
 use crate::png::style::{AxisScale, LegendPos};
 use pf_dredge::experiments::{
-    self as ex, CycleConfig, FLAT_WINDOW, Fig7Config, Fig7Result, Fig8Config, Fig8Result,
-    Fig56Config, Fig56Result, FlatStretch, NOISE_FLOOR, NSweepConfig, NSweepResult,
+    self as ex, Alignment, ConsistencyConfig, ConsistencyResult, CycleConfig, FLAT_WINDOW,
+    Fig7Config, Fig7Result, Fig8Config, Fig8Result, Fig56Config, Fig56Result, FlatStretch,
+    NOISE_FLOOR, NSweepConfig, NSweepResult,
 };
 use pf_dredge::simulator::Cycle;
 
@@ -38,6 +41,10 @@ struct DredgeResult {
     fig8: Fig8Result,
     n_sweep_config: NSweepConfig,
     n_sweep: NSweepResult,
+    /// Fig. 5's `Q̂_o`, `ρ̂_o` against the truth of sample `k` and of `k − 1`.
+    fig5_alignment: [Alignment; 2],
+    consistency_config: ConsistencyConfig,
+    consistency: ConsistencyResult,
 }
 
 const PAPER: &str = "dredge";
@@ -153,7 +160,7 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     let sc = ctx.scale;
     let err = VizError::paper(PAPER);
     let seed = ctx.seed;
-    let bar = ctx.progress.bar("dredge", 5);
+    let bar = ctx.progress.bar("dredge", 6);
 
     let cycle_config = CycleConfig {
         seed,
@@ -184,6 +191,13 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
         ..NSweepConfig::at_scale(sc)
     };
     let ns = ex::n_sweep(&n_sweep_config).map_err(err)?;
+    bar.inc(1);
+    let consistency_config = ConsistencyConfig {
+        seed,
+        ..ConsistencyConfig::at_scale(sc)
+    };
+    let cons = ex::consistency(&consistency_config).map_err(err)?;
+    let align = ex::fig5_alignment(&f56).map_err(err)?;
     bar.inc(1);
     bar.finish_and_clear();
 
@@ -475,7 +489,12 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
     let dstd = |s: Option<pf_core::metrics::ResidualSummary>| {
         s.map_or("–".to_owned(), |s| format!("{:.3}", s.std))
     };
-    let row = |name: &str, x: &ex::ResidualReport, direct: String| {
+    let pm = |m: ex::MeanSe, digits: usize| format!("{:.*} ± {:.*}", digits, m.mean, digits, m.se);
+    let row = |name: &str,
+               x: &ex::ResidualReport,
+               direct: String,
+               a: &Alignment,
+               m: &ex::ConsistencySignal| {
         vec![
             name.to_owned(),
             format!("{}", x.paper.mean),
@@ -489,14 +508,22 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             format!("{:.3}", x.signal_range),
             format!("{:.1} %", 100.0 * x.relative_std),
             direct,
+            format!("{:.3}", a.against_k_minus_1.std),
+            pm(m.residual_std, 3),
+            format!("{:.3}", m.posterior_sd.mean),
         ]
     };
-    let tables = vec![Table {
+    let mut tables = vec![Table {
         id: "residuals".into(),
         caption: "Phase-3 residuals (simulated − PF estimate), the paper's (Section V-B, Fig. 6) \
                   beside ours; ranges are the signal ranges (paper: its \"nominal\" range, from \
-                  max |·| ≈ 10 % of it), std / range makes the two comparable. Last column: the \
-                  direct computation's (15)–(16) residual std in phase 3, where defined."
+                  max |·| ≈ 10 % of it), std / range makes the two comparable. \"direct std\": the \
+                  direct computation's (15)–(16) residual std in phase 3, where defined. \
+                  \"our std vs k−1\": our estimate at k against the truth of sample k − 1 (the \
+                  flow that made the measurement at k). Last two: the same filter on data drawn \
+                  from its own model (13) over our phase 3 (table dredge-consistency): residual \
+                  std (mean ± s.e. over the runs) and the filter's posterior sd; paper → model \
+                  (13) → ours shows how much of the gap is the filter and how much the scenario."
             .into(),
         header: [
             "signal",
@@ -511,14 +538,90 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             "our range",
             "our std/range",
             "direct std",
+            "our std vs k−1",
+            "model (13) std",
+            "model (13) posterior sd",
         ]
         .map(String::from)
         .to_vec(),
         rows: vec![
-            row("Qₒ (m³/s)", q, dstd(d.q_o)),
-            row("ρₒ (kg/m³)", r, dstd(d.rho_o)),
+            row("Qₒ (m³/s)", q, dstd(d.q_o), &align[0], &cons.q_o),
+            row("ρₒ (kg/m³)", r, dstd(d.rho_o), &align[1], &cons.rho_o),
         ],
     }];
+
+    let crow = |name: &str, m: &ex::ConsistencySignal, spaced: f64, a: &Alignment, d: usize| {
+        vec![
+            name.to_owned(),
+            pm(m.nees, 2),
+            format!("{spaced:.2}"),
+            pm(m.residual_std, d),
+            pm(m.posterior_sd, d),
+            pm(m.residual_std_k_minus_1, d),
+            format!("{:.*}", d, a.against_k.std),
+            format!("{:.*}", d, a.against_k_minus_1.std),
+        ]
+    };
+    tables.push(Table {
+        id: "consistency".into(),
+        caption: format!(
+            "Beyond the paper: the filter (N = {}) on {} data sets drawn from its own model \
+             (13) over our phase 3 ({} samples: our cycle's ρᵢ and times, Qᵢ holding the \
+             volume on the measurements, prior Qₒ ~ N({:.2}, {}²), ρₒ ~ N({:.0}, {}²) for data \
+             and filter). NEES = (truth − estimate)² / posterior variance, mean 1 for a consistent \
+             filter (joint: (Qₒ, ρₒ) with the covariance, halved), as mean ± s.e. over runs and \
+             as the mean of {} values {} samples apart. Alignment: residual std against the \
+             truth of sample k (the average over [t_k, t_k+1)) and of k − 1, on model-(13) \
+             data and on our simulator (Fig. 5's run).",
+            consistency_config.filter.n_particles,
+            consistency_config.runs,
+            cons.samples,
+            cons.prior.q_o_mean,
+            cons.prior.q_o_std,
+            cons.prior.rho_o_mean,
+            cons.prior.rho_o_std,
+            cons.spaced_count,
+            consistency_config.spacing,
+        ),
+        header: [
+            "signal",
+            "NEES",
+            "NEES, spaced",
+            "model (13) std vs k",
+            "model (13) posterior sd",
+            "model (13) std vs k−1",
+            "simulator std vs k",
+            "simulator std vs k−1",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: vec![
+            crow(
+                "Qₒ (m³/s)",
+                &cons.q_o,
+                cons.spaced_nees_mean[0],
+                &align[0],
+                3,
+            ),
+            crow(
+                "ρₒ (kg/m³)",
+                &cons.rho_o,
+                cons.spaced_nees_mean[1],
+                &align[1],
+                1,
+            ),
+            vec![
+                "(Qₒ, ρₒ) joint / 2".into(),
+                pm(cons.joint_nees, 2),
+                format!("{:.2}", cons.spaced_nees_mean[2]),
+                "".into(),
+                "".into(),
+                "".into(),
+                "".into(),
+                "".into(),
+            ],
+        ],
+    });
 
     let notes = vec![
         format!(
@@ -548,6 +651,49 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             sweep_rho_std(&ns, fig5_6_config.filter.n_particles),
             flat_stretch_note(f56.rho_o_flat_stretch()),
             f56.rho_o_lag(),
+        ),
+        format!(
+            "The filter against its own model (table dredge-consistency): on data drawn from \
+             model (13) over our phase 3, Qₒ is consistent (NEES {}, residual std {} against \
+             posterior sd {} m³/s), and ρₒ's residual std is {} kg/m³ against a posterior sd \
+             of {} (NEES {}; at N = {} the particle approximation adds Monte Carlo error to \
+             ρ̂ₒ, at N = 10 000 the NEES is 1.01 ± 0.04, crate README). So the paper's tuning, \
+             on a ρₒ that moves as its own random walk, leaves about {:.0} kg/m³: of the gap \
+             from the paper's 13.2 to our {:.1}, the part above {:.0} is our scenario (the \
+             transients of point 3), the part below it says the paper's simulated ρₒ was \
+             smoother than the filter's random walk.",
+            pm(cons.q_o.nees, 2),
+            pm(cons.q_o.residual_std, 3),
+            pm(cons.q_o.posterior_sd, 3),
+            pm(cons.rho_o.residual_std, 1),
+            pm(cons.rho_o.posterior_sd, 1),
+            pm(cons.rho_o.nees, 2),
+            consistency_config.filter.n_particles,
+            cons.rho_o.residual_std.mean,
+            r.ours.std,
+            cons.rho_o.residual_std.mean,
+        ),
+        format!(
+            "Alignment: the truth at k is the average over [t_k, t_k+1), the flow that moves \
+             V_k to V_k+1; the estimate at k has seen V_k and m_k, made by the flow of sample \
+             k − 1, and under the random walks (11)–(12) it is at once the filtered value of \
+             k − 1 and the prediction of k. Against the truth of k − 1 our Qₒ residual std is \
+             {:.3} m³/s on the simulator and {} on model-(13) data, against k {:.3} and {}: \
+             the paper's 0.345 is below the {:.3} that its filter's own posterior gives for \
+             Qₒ,k (the volume equation is linear, so this sd does not depend on the scenario) \
+             and at what the pairing with k − 1 gives. So Fig. 5 most likely shows the \
+             estimate at t_k beside the flow that produced the measurement at t_k (a \
+             simulator sampled at the end of each period); a pairing with k would need a \
+             simulated Qₒ much smoother than the filter's random walk. For ρₒ \
+             the pairing moves the std little ({:.1} → {:.1} kg/m³ on the simulator): its \
+             error is the lag, not the half-sample.",
+            align[0].against_k_minus_1.std,
+            pm(cons.q_o.residual_std_k_minus_1, 3),
+            align[0].against_k.std,
+            pm(cons.q_o.residual_std, 3),
+            cons.q_o.posterior_sd.mean,
+            align[1].against_k.std,
+            align[1].against_k_minus_1.std,
         ),
         "Values the paper leaves unstated, chosen physically plausible (crate README lists them \
          with units): hopper area A, k_o, k'_o, k_c, v_s, β, ρ_q, ρ_s, ρ_w, the inflow \
@@ -590,6 +736,9 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
             fig8: f8,
             n_sweep_config,
             n_sweep: ns,
+            fig5_alignment: align,
+            consistency_config,
+            consistency: cons,
         },
     )?;
     Ok(SectionReport {
