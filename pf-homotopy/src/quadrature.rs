@@ -612,3 +612,115 @@ pub fn erfc(x: f64) -> f64 {
     let r = t * poly.exp();
     if x >= 0.0 { r } else { 2.0 - r }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Matrix2;
+    use pf_core::mc::stream_rng;
+    use rand::RngExt;
+
+    /// The extremes every outline point's C-library bearing gives, as `bearing_extent`
+    /// computed them before its first pass by pseudo-angle.
+    fn extent_by_atan2(g: &Gaussian<2>, rho: [f64; 2], c: f64) -> Option<(f64, f64, f64)> {
+        let l = g.chol()?;
+        let lm = g.cov.try_inverse()?;
+        let d = g.mean - Vector2::new(rho[0], rho[1]);
+        if d.dot(&(lm * d)) <= c * c {
+            return None;
+        }
+        let bc = d[1].atan2(d[0]);
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for i in 0..OUTLINE {
+            let t = std::f64::consts::TAU * i as f64 / OUTLINE as f64;
+            let q = d + c * l * Vector2::new(t.cos(), t.sin());
+            let db = wrap_angle(q[1].atan2(q[0]) - bc);
+            lo = lo.min(db);
+            hi = hi.max(db);
+        }
+        let pad = 0.02 * (hi - lo);
+        Some((bc, lo - pad, hi + pad))
+    }
+
+    /// The diamond angle increases with the angle over the whole circle.
+    #[test]
+    fn the_diamond_angle_increases_with_the_angle() {
+        let n = 100_000;
+        let mut prev = f64::NEG_INFINITY;
+        for i in 0..n {
+            let a = -std::f64::consts::PI + std::f64::consts::TAU * (i as f64 + 0.5) / n as f64;
+            let p = diamond(3.0 * a.sin(), 3.0 * a.cos());
+            assert!(p > prev, "not increasing at angle {a}: {p} after {prev}");
+            prev = p;
+        }
+    }
+
+    /// The two-pass extent is the one-pass extent to the last bit, over random ellipses
+    /// seen from near and far (thin, round, tilted; from beside an elongated one, where the
+    /// bearings reach more than π/2 from the centre's).
+    #[test]
+    fn the_bearing_extent_is_the_c_librarys_to_the_last_bit() {
+        let mut rng = stream_rng(7, 0);
+        let mut seen = 0;
+        for _ in 0..2000 {
+            let mean = Vector2::new(rng.random_range(-5e3..5e3), rng.random_range(-5e3..5e3));
+            let (s1, s2) = (rng.random_range(1.0..3e3f64), rng.random_range(1.0..3e3f64));
+            let th: f64 = rng.random_range(0.0..std::f64::consts::PI);
+            let (s, c) = th.sin_cos();
+            let rot = Matrix2::new(c, -s, s, c);
+            let cov = rot * Matrix2::new(s1 * s1, 0.0, 0.0, s2 * s2) * rot.transpose();
+            let g = Gaussian::new(mean, 0.5 * (cov + cov.transpose()));
+            let rho = [rng.random_range(-6e3..6e3), rng.random_range(-6e3..6e3)];
+            let (l, lm) = (g.chol().unwrap(), g.cov.try_inverse().unwrap());
+            let two_pass = bearing_extent(&g, &l, &lm, rho, 5.0);
+            let one_pass = extent_by_atan2(&g, rho, 5.0);
+            let bits = |e: Option<(f64, f64, f64)>| e.map(|(a, b, c)| [a, b, c].map(f64::to_bits));
+            assert_eq!(bits(two_pass), bits(one_pass), "{g:?} from {rho:?}");
+            seen += usize::from(two_pass.is_some());
+        }
+        assert!(seen > 500, "only {seen} ellipses excluded the observer");
+    }
+
+    /// Filling for one base at several λ, in any order, gives the nodes a fresh grid gives:
+    /// the kept pre-grid is the one the base would build.
+    #[test]
+    fn a_kept_pre_grid_fills_as_a_fresh_one() {
+        let base = Gaussian::new(
+            Vector2::new(3500.0, 3500.0),
+            Matrix2::new(1e6, 9e5, 9e5, 1e6),
+        );
+        let other = Gaussian::new(
+            Vector2::new(2000.0, 4000.0),
+            Matrix2::new(4e5, 0.0, 0.0, 9e5),
+        );
+        let grid = || PolarGrid::new(PolarGridConfig::default(), [0.0, 0.0], 0.87, 0.0175);
+        let kept = grid();
+        let mut nodes = Nodes::new();
+        for (g, lambda) in [
+            (&base, 0.0),
+            (&base, 0.3),
+            (&other, 0.0),
+            (&base, 1.0),
+            (&base, 0.3),
+        ] {
+            kept.fill(g, lambda, &mut nodes).unwrap();
+            let mut fresh = Nodes::new();
+            grid().fill(g, lambda, &mut fresh).unwrap();
+            let bits = |n: &Nodes<2>| {
+                let mut v: Vec<u64> = n
+                    .log_w
+                    .iter()
+                    .chain(&n.log_g)
+                    .map(|x| x.to_bits())
+                    .collect();
+                v.extend(
+                    n.points
+                        .iter()
+                        .flat_map(|p| [p[0].to_bits(), p[1].to_bits()]),
+                );
+                v
+            };
+            assert_eq!(bits(&nodes), bits(&fresh), "λ = {lambda}");
+        }
+    }
+}
