@@ -37,13 +37,13 @@ fn corrections(c: &mut Criterion) {
 }
 
 /// The PF of Section 4 over the default scenario's realisation from seed 1 (its 40
-/// bearings, means included) on the batch filter, N = 10³ and 10⁵.
+/// bearings, means included) on the batch filter, N = 10³, 10⁴, 10⁵ and 10⁶.
 fn particle_filter(c: &mut Criterion) {
     let sc = ScenarioConfig::default();
     let real = sc.simulate(&mut stream_rng(1, 0)).expect("valid scenario");
     let mut group = c.benchmark_group("pf");
     group.sample_size(10);
-    for n in [1000, 100_000] {
+    for n in [1000, 10_000, 100_000, 1_000_000] {
         group.bench_function(format!("N={n}"), |b| {
             b.iter(|| pf::run(&sc, n, &real, 2).expect("filter runs"))
         });

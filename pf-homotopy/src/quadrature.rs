@@ -177,8 +177,8 @@ impl PolarGridConfig {
 /// The paper's polar-coordinate grid for a bearing measurement `y ~ N(h(p, ρ), σ²)`.
 #[derive(Debug, Clone)]
 pub struct PolarGrid {
-    /// Scratch of the bearing pre-grid.
-    pre: std::cell::RefCell<Vec<f64>>,
+    /// The λ-free part of the last base's fill (see [`PreGrid`]).
+    pre: std::cell::RefCell<PreGrid>,
     /// Resolution.
     pub config: PolarGridConfig,
     /// Observer position ρ = (ξ, ζ).
@@ -189,8 +189,29 @@ pub struct PolarGrid {
     pub sigma: f64,
 }
 
+/// Points of the `c`-σ ellipse's outline that [`bearing_extent`] visits.
+const OUTLINE: usize = 256;
+
+/// `(cos t_i, sin t_i)`, `t_i = 2π i / OUTLINE`: the unit circle that [`bearing_extent`]
+/// maps onto the ellipse's outline, the same for every ellipse.
+static UNIT_CIRCLE: std::sync::LazyLock<[[f64; 2]; OUTLINE]> = std::sync::LazyLock::new(|| {
+    std::array::from_fn(|i| {
+        let t = std::f64::consts::TAU * i as f64 / OUTLINE as f64;
+        [t.cos(), t.sin()]
+    })
+});
+
 /// Bearing extent of the `c`-σ ellipse of `g` seen from `rho`: `(β_c, lo, hi)` with the
 /// interval `[β_c + lo, β_c + hi]`, or `None` when `rho` lies inside the ellipse.
+///
+/// The extremes are found in two passes: every outline point ranked by a pseudo-angle of
+/// its bearing relative to `β_c` (the "diamond angle" [`diamond`], monotone in the angle
+/// over the whole circle, one division instead of an `atan2`), then, for the points within
+/// `10⁻⁹` of the smallest or largest pseudo-angle, the bearing by the C library's `atan2`,
+/// whose extremes are returned. The pseudo-angle changes at least half as fast as the
+/// angle, so the second pass sees every point that rounding could have misranked: the
+/// result is the exact extreme of the C library's bearings, at a few `atan2` calls instead
+/// of 256.
 fn bearing_extent(
     g: &Gaussian<2>,
     l: &SMatrix<f64, 2, 2>,
@@ -206,24 +227,79 @@ fn bearing_extent(
     // The ellipse is convex and excludes ρ, so its extreme bearings lie on its outline;
     // 256 outline points place them within a chord error of cos(π/256) ≈ 1 − 7.5e-5 of the
     // true tangent, which the 2 % padding below covers.
-    const M: usize = 256;
+    let circle = &*UNIT_CIRCLE;
+    // The outline point `d + c L (cos t, sin t)` as the exact pass computes it.
+    let point = |u: &[f64; 2]| d + c * l * Vector2::new(u[0], u[1]);
+    let exact = |u: &[f64; 2]| {
+        let q = point(u);
+        wrap_angle(q[1].atan2(q[0]) - bc)
+    };
+    // First pass: the pseudo-angle of q turned by −β_c (by d, whose length does not
+    // matter to an angle).
+    let (sb, cb) = (d[1], d[0]);
+    let cl = c * l;
+    let (l00, l01, l10, l11) = (cl[(0, 0)], cl[(0, 1)], cl[(1, 0)], cl[(1, 1)]);
+    let (mut lo_a, mut hi_a) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut approx = [0.0; OUTLINE];
+    for (a, u) in approx.iter_mut().zip(circle) {
+        let q0 = d[0] + (l00 * u[0] + l01 * u[1]);
+        let q1 = d[1] + (l10 * u[0] + l11 * u[1]);
+        *a = diamond(cb * q1 - sb * q0, cb * q0 + sb * q1);
+        lo_a = lo_a.min(*a);
+        hi_a = hi_a.max(*a);
+    }
+    const TOL: f64 = 1e-9;
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for i in 0..M {
-        let t = std::f64::consts::TAU * i as f64 / M as f64;
-        let q = d + c * l * Vector2::new(t.cos(), t.sin());
-        let db = wrap_angle(q[1].atan2(q[0]) - bc);
-        lo = lo.min(db);
-        hi = hi.max(db);
+    for (a, u) in approx.iter().zip(circle) {
+        if *a <= lo_a + TOL {
+            lo = lo.min(exact(u));
+        }
+        if *a >= hi_a - TOL {
+            hi = hi.max(exact(u));
+        }
     }
     let pad = 0.02 * (hi - lo);
     Some((bc, lo - pad, hi + pad))
+}
+
+/// The diamond angle of `(x, y)`: `t = y/(|x| + |y|)` for `x ≥ 0`, `±2 − t` for `x < 0`
+/// (the sign of `y`), in `[−2, 2]`, increasing with `atan2(y, x)` over `(−π, π]`, with
+/// derivative `1/(|cos| + |sin|)² ≥ ½` in the angle.
+#[inline(always)]
+fn diamond(y: f64, x: f64) -> f64 {
+    let t = y / (x.abs() + y.abs());
+    if x >= 0.0 { t } else { 2.0f64.copysign(y) - t }
+}
+
+/// What [`PolarGrid::fill`] computes from its base Gaussian alone, whatever λ: kept from
+/// one call to the next while the base is the same, as it is over the HΔE's whole flow,
+/// which fills for the prior `f(·; θ_{k|k−1})` at every λ (the AHΔE's base moves with θ).
+#[derive(Debug, Clone, Default)]
+struct PreGrid {
+    /// The base's mean and covariance (`None` before the first fill or after a failed one).
+    key: Option<(SVector<f64, 2>, SMatrix<f64, 2, 2>)>,
+    /// `Λ = P⁻¹`, `log det P`, `d = m − ρ` and `dᵀΛd`.
+    lambda_mat: SMatrix<f64, 2, 2>,
+    ln_det: f64,
+    d: Vector2<f64>,
+    dd: f64,
+    /// The pre-grid: its first bearing `centre + lo0`, spacing and size.
+    centre: f64,
+    lo0: f64,
+    h_pre: f64,
+    /// Per pre-grid bearing: the log ray mass, `log ∫_0^∞ r N(ρ + r u_β) dr` up to a
+    /// constant, and `log g(y | β)` (empty until a fill with λ ≠ 0 needs it).
+    log_mass: Vec<f64>,
+    log_g: Vec<f64>,
+    /// Scratch: the placement density.
+    q: Vec<f64>,
 }
 
 impl PolarGrid {
     /// The grid for measurement `y` from observer `rho`.
     pub fn new(config: PolarGridConfig, rho: [f64; 2], y: f64, sigma: f64) -> Self {
         Self {
-            pre: std::cell::RefCell::new(Vec::new()),
+            pre: std::cell::RefCell::new(PreGrid::default()),
             config,
             rho,
             y,
@@ -242,17 +318,11 @@ impl PolarGrid {
         let e = wrap_angle(self.y - beta) / self.sigma;
         -0.5 * (LN_2PI + e * e) - ln_sigma
     }
-}
 
-impl TemperedQuadrature<2> for PolarGrid {
-    fn log_likelihood(&self, p: &SVector<f64, 2>) -> f64 {
-        self.log_g_bearing((p[1] - self.rho[1]).atan2(p[0] - self.rho[0]))
-    }
-
-    fn fill(&self, base: &Gaussian<2>, lambda: f64, nodes: &mut Nodes<2>) -> Result<()> {
-        nodes.clear();
-        let cfg = self.config;
-        let c = cfg.n_sigma;
+    /// The λ-free part of a fill for `base` into `pre`.
+    fn pre_grid(&self, base: &Gaussian<2>, pre: &mut PreGrid) -> Result<()> {
+        pre.key = None;
+        let c = self.config.n_sigma;
         let l = base.chol().ok_or(pf_core::CoreError::NotPositiveDefinite {
             what: "polar grid base covariance",
             pivot: 0,
@@ -284,7 +354,6 @@ impl TemperedQuadrature<2> for PolarGrid {
             ),
         };
         let dd = d.dot(&(lambda_mat * d));
-        let ln_sigma = self.sigma.ln();
         // The log of the ray mass along the unit direction u.
         let log_ray_mass = |u: Vector2<f64>| -> f64 {
             let lu = lambda_mat * u;
@@ -302,24 +371,81 @@ impl TemperedQuadrature<2> for PolarGrid {
             -0.5 * (dd - b * b / a) + i.max(f64::MIN_POSITIVE).ln()
         };
         let h_pre = (hi0 - lo0) / n_pre as f64;
-        let mut best = (f64::NEG_INFINITY, 0usize);
-        let pre = &mut *self.pre.borrow_mut();
-        pre.clear();
+        pre.log_mass.clear();
+        pre.log_g.clear();
         // The directions of the pre-grid by rotation, one step of h_pre at a time: after
         // 2048 steps the rounding has moved them by about 10⁻¹³, far below what placing the
         // nodes can see, and a step costs four products instead of a `sincos`.
         let beta0 = centre + lo0 + 0.5 * h_pre;
         let (sh, ch) = h_pre.sin_cos();
         let (mut s_dir, mut c_dir) = beta0.sin_cos();
-        for i in 0..n_pre {
-            let beta = centre + lo0 + (i as f64 + 0.5) * h_pre;
-            let v =
-                log_ray_mass(Vector2::new(c_dir, s_dir)) + lambda * self.log_g_with(beta, ln_sigma);
+        for _ in 0..n_pre {
+            pre.log_mass.push(log_ray_mass(Vector2::new(c_dir, s_dir)));
             (c_dir, s_dir) = (c_dir * ch - s_dir * sh, s_dir * ch + c_dir * sh);
+        }
+        *pre = PreGrid {
+            key: Some((base.mean, base.cov)),
+            lambda_mat,
+            ln_det,
+            d,
+            dd,
+            centre,
+            lo0,
+            h_pre,
+            log_mass: std::mem::take(&mut pre.log_mass),
+            log_g: std::mem::take(&mut pre.log_g),
+            q: std::mem::take(&mut pre.q),
+        };
+        Ok(())
+    }
+}
+
+impl TemperedQuadrature<2> for PolarGrid {
+    fn log_likelihood(&self, p: &SVector<f64, 2>) -> f64 {
+        self.log_g_bearing((p[1] - self.rho[1]).atan2(p[0] - self.rho[0]))
+    }
+
+    fn fill(&self, base: &Gaussian<2>, lambda: f64, nodes: &mut Nodes<2>) -> Result<()> {
+        nodes.clear();
+        let cfg = self.config;
+        let c = cfg.n_sigma;
+        let pre = &mut *self.pre.borrow_mut();
+        if pre.key != Some((base.mean, base.cov)) {
+            self.pre_grid(base, pre)?;
+        }
+        let (lambda_mat, ln_det, d, dd) = (pre.lambda_mat, pre.ln_det, pre.d, pre.dd);
+        let (centre, lo0, h_pre) = (pre.centre, pre.lo0, pre.h_pre);
+        let n_pre = pre.log_mass.len();
+        let rho = Vector2::new(self.rho[0], self.rho[1]);
+        let ln_sigma = self.sigma.ln();
+        // The tempered bearing marginal's log on the pre-grid, `log m_0 + λ log g`; at
+        // λ = 0 (the AHΔE) that is `log m_0` itself (`log g` is finite, so `0 · log g`
+        // adds a zero).
+        let mut best = (f64::NEG_INFINITY, 0usize);
+        let q = &mut pre.q;
+        q.clear();
+        if lambda == 0.0 {
+            q.extend_from_slice(&pre.log_mass);
+        } else {
+            if pre.log_g.len() != n_pre {
+                pre.log_g.clear();
+                pre.log_g.extend(
+                    (0..n_pre).map(|i| {
+                        self.log_g_with(centre + lo0 + (i as f64 + 0.5) * h_pre, ln_sigma)
+                    }),
+                );
+            }
+            q.extend(
+                pre.log_mass
+                    .iter()
+                    .zip(&pre.log_g)
+                    .map(|(m, g)| m + lambda * g),
+            );
+        }
+        for (i, &v) in q.iter().enumerate() {
             if v > best.0 {
                 best = (v, i);
             }
-            pre.push(v);
         }
         if !best.0.is_finite() {
             return Err(HomotopyError::DegenerateQuadrature { k: 0, lambda });
@@ -330,7 +456,7 @@ impl TemperedQuadrature<2> for PolarGrid {
         // secondary mass (when ρ is inside the ellipse, part of the Gaussian lies behind the
         // observer, all around it) while keeping most of them on the main lobe.
         let mut total = 0.0;
-        for v in pre.iter_mut() {
+        for v in q.iter_mut() {
             *v = exp_nonpositive(0.5 * (*v - best.0)) * h_pre;
             total += *v;
         }
@@ -339,13 +465,13 @@ impl TemperedQuadrature<2> for PolarGrid {
         let (mut cell, mut acc) = (0usize, 0.0);
         for ib in 0..nb {
             let u_target = (ib as f64 + 0.5) * du;
-            while cell + 1 < n_pre && acc + pre[cell] < u_target {
-                acc += pre[cell];
+            while cell + 1 < n_pre && acc + q[cell] < u_target {
+                acc += q[cell];
                 cell += 1;
             }
-            let frac = ((u_target - acc) / pre[cell]).clamp(0.0, 1.0);
+            let frac = ((u_target - acc) / q[cell]).clamp(0.0, 1.0);
             let beta = centre + lo0 + (cell as f64 + frac) * h_pre;
-            let db = du * h_pre / pre[cell];
+            let db = du * h_pre / q[cell];
             let u = Vector2::new(beta.cos(), beta.sin());
             // Along the ray ρ + r u: (p − m)ᵀΛ(p − m) = a r² − 2 b r + dᵀΛd.
             let lu = lambda_mat * u;
@@ -485,4 +611,116 @@ pub fn erfc(x: f64) -> f64 {
                                 + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
     let r = t * poly.exp();
     if x >= 0.0 { r } else { 2.0 - r }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Matrix2;
+    use pf_core::mc::stream_rng;
+    use rand::RngExt;
+
+    /// The extremes every outline point's C-library bearing gives, as `bearing_extent`
+    /// computed them before its first pass by pseudo-angle.
+    fn extent_by_atan2(g: &Gaussian<2>, rho: [f64; 2], c: f64) -> Option<(f64, f64, f64)> {
+        let l = g.chol()?;
+        let lm = g.cov.try_inverse()?;
+        let d = g.mean - Vector2::new(rho[0], rho[1]);
+        if d.dot(&(lm * d)) <= c * c {
+            return None;
+        }
+        let bc = d[1].atan2(d[0]);
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for i in 0..OUTLINE {
+            let t = std::f64::consts::TAU * i as f64 / OUTLINE as f64;
+            let q = d + c * l * Vector2::new(t.cos(), t.sin());
+            let db = wrap_angle(q[1].atan2(q[0]) - bc);
+            lo = lo.min(db);
+            hi = hi.max(db);
+        }
+        let pad = 0.02 * (hi - lo);
+        Some((bc, lo - pad, hi + pad))
+    }
+
+    /// The diamond angle increases with the angle over the whole circle.
+    #[test]
+    fn the_diamond_angle_increases_with_the_angle() {
+        let n = 100_000;
+        let mut prev = f64::NEG_INFINITY;
+        for i in 0..n {
+            let a = -std::f64::consts::PI + std::f64::consts::TAU * (i as f64 + 0.5) / n as f64;
+            let p = diamond(3.0 * a.sin(), 3.0 * a.cos());
+            assert!(p > prev, "not increasing at angle {a}: {p} after {prev}");
+            prev = p;
+        }
+    }
+
+    /// The two-pass extent is the one-pass extent to the last bit, over random ellipses
+    /// seen from near and far (thin, round, tilted; from beside an elongated one, where the
+    /// bearings reach more than π/2 from the centre's).
+    #[test]
+    fn the_bearing_extent_is_the_c_librarys_to_the_last_bit() {
+        let mut rng = stream_rng(7, 0);
+        let mut seen = 0;
+        for _ in 0..2000 {
+            let mean = Vector2::new(rng.random_range(-5e3..5e3), rng.random_range(-5e3..5e3));
+            let (s1, s2) = (rng.random_range(1.0..3e3f64), rng.random_range(1.0..3e3f64));
+            let th: f64 = rng.random_range(0.0..std::f64::consts::PI);
+            let (s, c) = th.sin_cos();
+            let rot = Matrix2::new(c, -s, s, c);
+            let cov = rot * Matrix2::new(s1 * s1, 0.0, 0.0, s2 * s2) * rot.transpose();
+            let g = Gaussian::new(mean, 0.5 * (cov + cov.transpose()));
+            let rho = [rng.random_range(-6e3..6e3), rng.random_range(-6e3..6e3)];
+            let (l, lm) = (g.chol().unwrap(), g.cov.try_inverse().unwrap());
+            let two_pass = bearing_extent(&g, &l, &lm, rho, 5.0);
+            let one_pass = extent_by_atan2(&g, rho, 5.0);
+            let bits = |e: Option<(f64, f64, f64)>| e.map(|(a, b, c)| [a, b, c].map(f64::to_bits));
+            assert_eq!(bits(two_pass), bits(one_pass), "{g:?} from {rho:?}");
+            seen += usize::from(two_pass.is_some());
+        }
+        assert!(seen > 500, "only {seen} ellipses excluded the observer");
+    }
+
+    /// Filling for one base at several λ, in any order, gives the nodes a fresh grid gives:
+    /// the kept pre-grid is the one the base would build.
+    #[test]
+    fn a_kept_pre_grid_fills_as_a_fresh_one() {
+        let base = Gaussian::new(
+            Vector2::new(3500.0, 3500.0),
+            Matrix2::new(1e6, 9e5, 9e5, 1e6),
+        );
+        let other = Gaussian::new(
+            Vector2::new(2000.0, 4000.0),
+            Matrix2::new(4e5, 0.0, 0.0, 9e5),
+        );
+        let grid = || PolarGrid::new(PolarGridConfig::default(), [0.0, 0.0], 0.87, 0.0175);
+        let kept = grid();
+        let mut nodes = Nodes::new();
+        for (g, lambda) in [
+            (&base, 0.0),
+            (&base, 0.3),
+            (&other, 0.0),
+            (&base, 1.0),
+            (&base, 0.3),
+        ] {
+            kept.fill(g, lambda, &mut nodes).unwrap();
+            let mut fresh = Nodes::new();
+            grid().fill(g, lambda, &mut fresh).unwrap();
+            let bits = |n: &Nodes<2>| {
+                let mut v: Vec<u64> = n
+                    .log_w
+                    .iter()
+                    .chain(&n.log_g)
+                    .map(|x| x.to_bits())
+                    .collect();
+                v.extend(
+                    n.points
+                        .iter()
+                        .flat_map(|p| [p[0].to_bits(), p[1].to_bits()]),
+                );
+                v
+            };
+            assert_eq!(bits(&nodes), bits(&fresh), "λ = {lambda}");
+        }
+    }
 }

@@ -327,3 +327,37 @@ fn one_and_two_threads_give_the_same_bits() {
     };
     assert_eq!(run_on(1), run_on(2));
 }
+
+/// `pf::run`'s position means, summed from the copied-out weights and columns, are the
+/// filter's own `mean_into` to rounding (the same particles and weights, summed in another
+/// order), at a size whose last group of eight is partial.
+#[test]
+fn run_means_are_the_filters_means() {
+    use pf_core::mc::Par;
+    use pf_homotopy::filters::pf::{particle_filter, run};
+    let sc = ScenarioConfig {
+        n_samples: 12,
+        ..ScenarioConfig::default()
+    };
+    let real = sc.simulate(&mut stream_rng(5, 0)).unwrap();
+    let n = 20_003;
+    let observer: Vec<[f64; 2]> = real.observer.iter().map(|o| o.pos).collect();
+    let model = BotModel::new(&sc, observer, real.bearings[0]).unwrap();
+    let mut pf = particle_filter(model, n, 9, Par::Rayon).unwrap();
+    let means = run(&sc, n, &real, 9).unwrap();
+    assert_eq!(means.len(), real.bearings.len());
+    let mut m = [0.0; 4];
+    for (k, (y, got)) in real.bearings.iter().zip(&means).enumerate() {
+        pf.step((k > 0).then_some(y)).unwrap();
+        pf.mean_into(&mut m).unwrap();
+        for c in 0..2 {
+            let scale = m[c].abs().max(1.0);
+            assert!(
+                (got[c] - m[c]).abs() <= 1e-11 * scale,
+                "step {k}, component {c}: {} against {}",
+                got[c],
+                m[c]
+            );
+        }
+    }
+}

@@ -196,18 +196,26 @@ fn backward_row<M, F>(
         let mut acc = [0.0f64; 4];
         if w == 4 {
             // The common case in registers (a slice of run-time length kept `acc` on the
-            // stack, a third of the row's time).
-            let [mut a0, mut a1, mut a2, mut a3] = acc;
-            for (&b, tj) in scratch.beta.iter().zip(t_prev.chunks_exact(d)) {
+            // stack, a third of the row's time), over two interleaved partial sums (even
+            // and odd `j`, added at the end) so that consecutive `j` do not wait on each
+            // other's additions.
+            let (mut even, mut odd) = ([0.0f64; 4], [0.0f64; 4]);
+            let add = |a: &mut [f64; 4], b: f64, tj: &[f64]| {
                 if b != 0.0 {
                     let t4 = &tj[c0..c0 + 4];
-                    a0 += b * t4[0];
-                    a1 += b * t4[1];
-                    a2 += b * t4[2];
-                    a3 += b * t4[3];
+                    for (a, t) in a.iter_mut().zip(t4) {
+                        *a += b * t;
+                    }
+                }
+            };
+            let mut rows = scratch.beta.iter().zip(t_prev.chunks_exact(d));
+            while let Some((&b0, t0)) = rows.next() {
+                add(&mut even, b0, t0);
+                if let Some((&b1, t1)) = rows.next() {
+                    add(&mut odd, b1, t1);
                 }
             }
-            acc = [a0, a1, a2, a3];
+            acc = std::array::from_fn(|l| even[l] + odd[l]);
         } else {
             for (&b, tj) in scratch.beta.iter().zip(t_prev.chunks_exact(d)) {
                 if b != 0.0 {
