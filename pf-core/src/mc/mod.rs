@@ -2,11 +2,15 @@
 //!
 //! Replication `r` of a run with seed `s` draws from its own stream, derived from `(s, r)`
 //! alone. Replications run in parallel with rayon and are collected in order of `r`, so the
-//! results are bit-identical whatever the number of threads.
+//! results are bit-identical whatever the number of threads, and, through [`dist`] (feature
+//! `mpi`), whatever the number of MPI ranks.
+
+pub mod dist;
 
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rayon::prelude::*;
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 /// The engine's generator: xoshiro256++ (Blackman & Vigna 2021), fast, 2²⁵⁶ − 1 period,
@@ -95,11 +99,23 @@ pub enum Par {
 }
 
 /// Run `f(r, rng_r)` for `r = 0..n` and collect the results in order of `r`.
+///
+/// The results are serialisable so that, in an MPI run ([`dist`]), they can cross ranks;
+/// they are the same values whatever the number of threads or ranks.
+///
+/// # Panics
+/// If a replication panics; in an MPI run also if the ranks' programs took different
+/// paths ([`CoreError::Distributed`](crate::CoreError::Distributed)).
 pub fn replicate<T, F>(seed: u64, n: usize, par: Par, f: F) -> Vec<T>
 where
-    T: Send,
+    T: Send + Serialize + DeserializeOwned,
     F: Fn(usize, &mut PfRng) -> T + Sync,
 {
+    if let Some(study) = dist::Study::begin(seed, n) {
+        return study
+            .run(par, |r, rng| Ok::<_, crate::CoreError>(f(r, rng)))
+            .unwrap_or_else(|e| panic!("replicate(seed {seed}, {n} replications): {e}"));
+    }
     let mut out = Vec::new();
     replicate_into(seed, n, par, f, &mut out);
     out
@@ -127,11 +143,14 @@ where
 /// [`CoreError::TooLarge`](crate::CoreError::TooLarge) for more than
 /// [`MAX_COUNT`](crate::limits::MAX_COUNT) replications (a count from user input), or
 /// results that would not fit in the machine's memory, both checked before anything runs;
-/// otherwise the error of the lowest-numbered failing replication.
+/// otherwise the error of the lowest-numbered failing replication. In an MPI run ([`dist`])
+/// that error is [`CoreError::Replication`](crate::CoreError::Replication) with its index
+/// and message, on every rank; ranks whose programs took different paths get
+/// [`CoreError::Distributed`](crate::CoreError::Distributed).
 pub fn try_replicate<T, E, F>(seed: u64, n: usize, par: Par, f: F) -> Result<Vec<T>, E>
 where
-    T: Send,
-    E: Send + From<crate::CoreError>,
+    T: Send + Serialize + DeserializeOwned,
+    E: Send + std::fmt::Display + From<crate::CoreError>,
     F: Fn(usize, &mut PfRng) -> Result<T, E> + Sync,
 {
     const WHAT: &str = "the number of replications";
@@ -141,6 +160,9 @@ where
     // allocation or a process killed half-way.
     let both = size_of::<Result<T, E>>() + size_of::<T>();
     crate::limits::check_memory(WHAT, n, n.saturating_mul(both))?;
+    if let Some(study) = dist::Study::begin(seed, n) {
+        return study.run(par, f);
+    }
     let mut all: Vec<Result<T, E>> = crate::limits::try_with_capacity(WHAT, n)?;
     let mut ok: Vec<T> = crate::limits::try_with_capacity(WHAT, n)?;
     replicate_into(seed, n, par, f, &mut all);
