@@ -6,8 +6,9 @@
 //! rank; launched any other way, or built without the feature, nothing is initialised and
 //! every function here answers as for one process.
 //!
-//! With more than one rank, the outermost [`replicate`](super::replicate) or
-//! [`try_replicate`](super::try_replicate) of the program is a distributed study:
+//! With more than one rank, the outermost [`try_replicate`](super::try_replicate) of the
+//! program is a distributed study ([`replicate`](super::replicate), for results of any
+//! type, always runs whole on the calling process):
 //!
 //! * Replication indices `0..n` are dealt in contiguous blocks, rank `k` of `K` taking
 //!   `⌈n/K⌉` or `⌊n/K⌋` of them ([`share`]), lower ranks the larger blocks: uneven shares
@@ -24,8 +25,8 @@
 //!   index (as a one-process run returns that replication's error). A panic in a
 //!   replication is carried the same way and raised on every rank.
 //!
-//! A `replicate` inside a replication (or inside [`local`]) runs on the calling rank as
-//! usual. Before its results, each rank sends the study's number, seed and count: ranks
+//! A `try_replicate` inside a replication (or inside [`local`]) runs on the calling rank
+//! as usual. Before its results, each rank sends the study's number, seed and count: ranks
 //! whose programs took different paths (a decision made on measured time, say) get
 //! [`CoreError::Distributed`] instead of each other's results. Code whose studies depend
 //! on such decisions runs them inside [`local`], where each rank runs everything itself.
@@ -509,6 +510,64 @@ mod imp {
             .zip(&displs)
             .map(|(&c, &d)| buf[d as usize..(d + c) as usize].to_vec())
             .collect())
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        /// What a rank sends decodes to the same values bit for bit: NaN payloads, −0,
+        /// subnormals, infinities, nested vectors and options; a failure keeps its index
+        /// and message.
+        #[test]
+        fn results_cross_ranks_bit_for_bit() {
+            let odd = [
+                f64::from_bits(0x7ff8_dead_beef_0001),
+                -0.0,
+                f64::MIN_POSITIVE / 3.0,
+                f64::NEG_INFINITY,
+                0.1 + 0.2,
+            ];
+            let block: Vec<(f64, Option<Vec<f64>>, bool)> = odd
+                .iter()
+                .enumerate()
+                .map(|(i, &x)| (x, (i % 2 == 0).then(|| odd.to_vec()), i == 3))
+                .collect();
+            let bytes = postcard::to_stdvec(&Sent::Done(&block)).unwrap();
+            let Received::Done(back) = postcard::from_bytes::<Received<_>>(&bytes).unwrap() else {
+                panic!("a block decoded as a failure")
+            };
+            let bits = |v: &[(f64, Option<Vec<f64>>, bool)]| {
+                v.iter()
+                    .map(|(x, o, b)| {
+                        let o: Option<Vec<u64>> =
+                            o.as_ref().map(|o| o.iter().map(|y| y.to_bits()).collect());
+                        (x.to_bits(), o, *b)
+                    })
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&back), bits(&block));
+
+            let sent: Sent<'_, f64> = Sent::Failed {
+                replication: 5,
+                message: "at step 3: boom",
+                panicked: false,
+            };
+            let bytes = postcard::to_stdvec(&sent).unwrap();
+            match postcard::from_bytes::<Received<f64>>(&bytes).unwrap() {
+                Received::Failed {
+                    replication,
+                    message,
+                    panicked,
+                } => assert_eq!(
+                    (replication, message.as_str(), panicked),
+                    (5, "at step 3: boom", false)
+                ),
+                Received::Done(_) => panic!("a failure decoded as results"),
+            }
+            let e: CoreError = fail_everywhere(5, "boom".into(), false);
+            assert_eq!(e.to_string(), "replication 5: boom");
+        }
     }
 }
 

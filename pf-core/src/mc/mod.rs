@@ -2,8 +2,8 @@
 //!
 //! Replication `r` of a run with seed `s` draws from its own stream, derived from `(s, r)`
 //! alone. Replications run in parallel with rayon and are collected in order of `r`, so the
-//! results are bit-identical whatever the number of threads, and, through [`dist`] (feature
-//! `mpi`), whatever the number of MPI ranks.
+//! results are bit-identical whatever the number of threads, and, for [`try_replicate`]
+//! through [`dist`] (feature `mpi`), whatever the number of MPI ranks.
 
 pub mod dist;
 
@@ -100,22 +100,14 @@ pub enum Par {
 
 /// Run `f(r, rng_r)` for `r = 0..n` and collect the results in order of `r`.
 ///
-/// The results are serialisable so that, in an MPI run ([`dist`]), they can cross ranks;
-/// they are the same values whatever the number of threads or ranks.
-///
-/// # Panics
-/// If a replication panics; in an MPI run also if the ranks' programs took different
-/// paths ([`CoreError::Distributed`](crate::CoreError::Distributed)).
+/// Always on this process, for results of any type; in an MPI run every rank that calls it
+/// computes every replication. The studies that MPI ranks share go through
+/// [`try_replicate`], whose results can be serialised to cross ranks ([`dist`]).
 pub fn replicate<T, F>(seed: u64, n: usize, par: Par, f: F) -> Vec<T>
 where
-    T: Send + Serialize + DeserializeOwned,
+    T: Send,
     F: Fn(usize, &mut PfRng) -> T + Sync,
 {
-    if let Some(study) = dist::Study::begin(seed, n) {
-        return study
-            .run(par, |r, rng| Ok::<_, crate::CoreError>(f(r, rng)))
-            .unwrap_or_else(|e| panic!("replicate(seed {seed}, {n} replications): {e}"));
-    }
     let mut out = Vec::new();
     replicate_into(seed, n, par, f, &mut out);
     out
@@ -263,14 +255,14 @@ mod tests {
         let r = try_replicate(0, usize::MAX, Par::Rayon, fail_from_3);
         assert!(matches!(r, Err(CoreError::TooLarge { .. })), "{r:?}");
         // So is a count within the limit whose results would not fit (2³² results of
-        // 4 KiB, 16 TiB), before any replication runs (on Linux, where the machine's memory
+        // 4 KiB, 16 TiB, as nested arrays, which serde encodes up to 32 long), before any replication runs (on Linux, where the machine's memory
         // is known; elsewhere the reservation alone decides).
         #[cfg(target_os = "linux")]
         {
             let ran = std::sync::atomic::AtomicBool::new(false);
             let r = try_replicate(0, crate::limits::MAX_COUNT, Par::Rayon, |_, _| {
                 ran.store(true, std::sync::atomic::Ordering::Relaxed);
-                Ok::<_, CoreError>([0u8; 4096])
+                Ok::<_, CoreError>([[[0u8; 32]; 32]; 4])
             });
             assert!(matches!(r, Err(CoreError::TooLarge { .. })));
             assert!(!ran.into_inner());
