@@ -218,6 +218,10 @@ mod imp {
 
     /// The hidden variable naming a replication that fails on purpose (tests only).
     pub(super) const FAIL_VAR: &str = "PF_MPI_FAIL_REPLICATION";
+    /// Set (to anything), rank 0 prints one line per distributed study to stderr: its size,
+    /// rank 0's compute time and the bytes exchanged (for scaling estimates).
+    const TRACE_VAR: &str = "PF_MPI_TRACE";
+    static TRACE: AtomicBool = AtomicBool::new(false);
 
     #[derive(Clone, Copy)]
     pub(super) struct World {
@@ -265,6 +269,7 @@ mod imp {
         {
             FAIL.store(r.saturating_add(1), Ordering::Relaxed);
         }
+        TRACE.store(std::env::var_os(TRACE_VAR).is_some(), Ordering::Relaxed);
         INSTALLED.store(true, Ordering::Release);
         Ok(Some(Session {
             _universe: universe,
@@ -357,12 +362,14 @@ mod imp {
                     f(r, &mut stream_rng(seed, r as u64))
                 }))
             };
+            let started = std::time::Instant::now();
             let block = share(n, rank, size);
             let lo = block.start;
             let outcomes: Vec<_> = match par {
                 Par::Seq => block.map(one).collect(),
                 Par::Rayon => block.into_par_iter().map(one).collect(),
             };
+            let computed = started.elapsed();
             // This rank's results, or its first failure (a panic before an error, as a
             // one-process run raises a panic whatever else failed).
             let mut mine = Vec::with_capacity(outcomes.len());
@@ -425,6 +432,17 @@ mod imp {
             }
             let lens: Vec<u64> = all.iter().map(|a| a[3]).collect();
             let received = exchange(&bytes, &lens).map_err(E::from)?;
+            if rank == 0 && TRACE.load(Ordering::Relaxed) {
+                eprintln!(
+                    "{TRACE_VAR}: study #{study} (seed {seed}): {n} replications on {size} ranks; \
+                     rank 0 computed its {} in {:.3} s, then waited for the others and \
+                     exchanged {} bytes in {:.4} s",
+                    share(n, 0, size).len(),
+                    computed.as_secs_f64(),
+                    lens.iter().sum::<u64>(),
+                    (started.elapsed() - computed).as_secs_f64()
+                );
+            }
             drop(bytes);
             let mut out: Vec<T> = crate::limits::try_with_capacity("the replications", n)?;
             for (k, part) in received.iter().enumerate() {
