@@ -1,22 +1,31 @@
-//! Data association (EPF step 1): gating by validation ellipsoids, then energy
-//! minimisation, or the nearest-neighbour standard filter (NNSF) as the baseline.
+//! Data association (EPF step 1): gating by validation ellipsoids, then a rule applied to a
+//! cost: each measurement on its own (eq. (1)) or a global one-to-one assignment, on the
+//! energy `E` or on the distance to the prediction `Â(t)` (the NNSF's).
 //!
 //! - **Gate.** Detection `y_j` is validated for target `k` when it lies in the ellipsoid
 //!   around the prediction `Â(t)` holding probability `P_G` of `N(Â(t), Σ̂_k)`:
 //!   `(y_j − Â(t))ᵀ Σ̂_k⁻¹ (y_j − Â(t)) ≤ γ`, `γ = −2 ln(1 − P_G)` (the χ²₂ quantile). Its
 //!   axes are the eigenvectors of `Σ̂_k`, its semi-axes `√(γλ)` (see
 //!   [`pf_core::gaussian::error_ellipse`]). A detection outside every gate is clutter.
-//! - **Energy, global** ([`Association::Energy`]). The abstract's "global minimization of
-//!   an energy": each target takes at most one detection and each detection at most one
-//!   target, minimising `Σ E(k, y_j)` over gated pairs plus [`MISS_COST`] per target left
-//!   without one (Hungarian method).
-//! - **Energy, per measurement** ([`Association::EnergyPerMeasurement`]). Eq. (1) read
-//!   literally: `y_j → argmin_k E(k, y_j)` over the targets whose gate holds it; a target
-//!   given several keeps the one of least energy.
-//! - **NNSF** ([`Association::Nearest`]). Each detection goes to the validated target
-//!   whose prediction is nearest (the Mahalanobis distance of E¹, from the same point); a
-//!   target given several keeps the nearest (Li & Bar-Shalom 1996). This is how the paper
-//!   applies it in Section 4 ("NNSF would associate M₂ to T₁").
+//! - **Per measurement** (eq. (1), Section 3 step 1): `y_j → argmin_k cost(k, y_j)` over the
+//!   targets whose gate holds `y_j`; a target given several keeps the one of least cost.
+//! - **Global**: each target takes at most one detection and each detection at most one
+//!   target, minimising the total cost over gated pairs plus a miss cost per target left
+//!   without one (Hungarian method); the abstract's "global minimization of an energy".
+//!
+//! | name | rule | cost | paper |
+//! |---|---|---|---|
+//! | `energy_per_measurement` ([`Association::EnergyPerMeasurement`]) | per measurement | `E(k, y_j)`, eq. (1) | the EPF |
+//! | `energy` ([`Association::Energy`], the tracker's default) | global | `E`, a miss costs [`MISS_COST`] | the abstract's "global minimization of an energy" |
+//! | `nn` ([`Association::Nearest`]) | per measurement | Mahalanobis distance to `Â(t)` | the NNSF: "the closest validate measurement to a predicted target" (Li & Bar-Shalom 1996) |
+//! | `nn_global` ([`Association::NearestGlobal`]) | global | squared Mahalanobis distance to `Â(t)`, a miss costs `2γ` | global nearest neighbour |
+//! | `nn_previous` ([`Association::NearestPrevious`]) | per measurement | Mahalanobis distance to `Â(t−1)`, E¹'s | Section 4's "NNSF would associate M₂ to T₁" |
+//!
+//! `nn_previous` is kept because it is the distance under which Section 4's examples make
+//! NNSF fail (the detection is judged by where the targets were, as `α₁E¹` is), and because
+//! it is `energy_per_measurement` with E² and E³ left out up to the normalisation, which
+//! isolates what the two geometric energies add. `energy` keeps the meaning it had (the
+//! global assignment on E): it is the better of the two rules on every scene of the report.
 
 use crate::assignment::Hungarian;
 use crate::energy::{EnergyConfig, EnergyMatrix, TargetGeometry};
@@ -25,35 +34,57 @@ use crate::geometry::Vec2;
 use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
 
-/// Cost of leaving a target without a detection in the global assignment. Every energy is
-/// at most 1, so 2 makes one more assigned pair worth more than any reshuffle of one pair.
+/// Cost of leaving a target without a detection in the global energy assignment. Every
+/// energy is at most 1, so 2 makes one more assigned pair worth more than any reshuffle of
+/// one pair.
 pub const MISS_COST: f64 = 2.0;
 
 /// A cost that forbids a pair (outside the gate). Finite so the Hungarian arithmetic stays
 /// exact; larger than any sum of real costs.
 const FORBIDDEN: f64 = 1e9;
 
-/// How detections are associated with targets.
+/// How detections are associated with targets: a rule and a cost (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Association {
-    /// Global energy minimisation (optimal assignment on the E matrix).
+    /// Global energy minimisation (optimal assignment on the E matrix); the default.
     #[default]
     #[serde(rename = "energy")]
     Energy,
-    /// The per-measurement argmin of eq. (1).
+    /// Eq. (1): each measurement to the gated target of least energy (the paper's EPF).
     #[serde(rename = "energy_per_measurement")]
     EnergyPerMeasurement,
-    /// The nearest-neighbour standard filter.
+    /// The nearest-neighbour standard filter: each measurement to the gated target whose
+    /// prediction `Â(t)` is nearest.
     #[serde(rename = "nn")]
     Nearest,
+    /// Global nearest neighbour: optimal assignment on the squared distance to `Â(t)`.
+    #[serde(rename = "nn_global")]
+    NearestGlobal,
+    /// Each measurement to the gated target whose previous estimate `Â(t−1)` is nearest
+    /// (E¹'s distance).
+    #[serde(rename = "nn_previous")]
+    NearestPrevious,
+}
+
+/// Which cost an [`Association`] minimises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cost {
+    /// `E(k, y_j)`, eq. (1).
+    Energy,
+    /// The squared Mahalanobis distance from the prediction `Â(t)`.
+    DistancePredicted,
+    /// The squared Mahalanobis distance from the previous estimate `Â(t−1)`.
+    DistancePrevious,
 }
 
 impl Association {
     /// Every method.
-    pub const ALL: [Association; 3] = [
+    pub const ALL: [Association; 5] = [
         Association::Energy,
         Association::EnergyPerMeasurement,
         Association::Nearest,
+        Association::NearestGlobal,
+        Association::NearestPrevious,
     ];
 
     /// The name used in configs and on the command line.
@@ -62,6 +93,22 @@ impl Association {
             Association::Energy => "energy",
             Association::EnergyPerMeasurement => "energy_per_measurement",
             Association::Nearest => "nn",
+            Association::NearestGlobal => "nn_global",
+            Association::NearestPrevious => "nn_previous",
+        }
+    }
+
+    /// Whether the rule is the global assignment (otherwise per measurement, eq. (1)).
+    pub fn is_global(self) -> bool {
+        matches!(self, Association::Energy | Association::NearestGlobal)
+    }
+
+    /// The cost the rule minimises.
+    pub fn cost(self) -> Cost {
+        match self {
+            Association::Energy | Association::EnergyPerMeasurement => Cost::Energy,
+            Association::Nearest | Association::NearestGlobal => Cost::DistancePredicted,
+            Association::NearestPrevious => Cost::DistancePrevious,
         }
     }
 }
@@ -88,16 +135,17 @@ pub fn gate_threshold(p_g: f64) -> Result<f64> {
     Ok(-2.0 * (-p_g).ln_1p())
 }
 
-/// `y_j → argmin_k cost(k, j)` over the targets whose gate holds `y_j` (ties to the lower
-/// `k`); a target given several detections keeps the one of least cost. `cost` and `gated`
-/// are K × M, row-major.
-fn per_measurement_argmin(
+/// Eq. (1)'s rule: `y_j → argmin_k cost(k, j)` over the targets whose gate holds `y_j`
+/// (ties to the lower `k`); a target given several detections keeps the one of least cost.
+/// `cost` and `gated` are K × M, row-major; `out` has K entries.
+pub fn per_measurement_argmin(
     k: usize,
     m: usize,
     cost: &[f64],
     gated: &[bool],
     out: &mut [Option<usize>],
 ) {
+    out.fill(None);
     for j in 0..m {
         let best = (0..k)
             .filter(|&i| gated[i * m + j])
@@ -117,6 +165,7 @@ pub struct Associator {
     energy: EnergyMatrix,
     gated: Vec<bool>,
     cost: Vec<f64>,
+    padded: Vec<f64>,
     cols: Vec<usize>,
     hungarian: Hungarian,
 }
@@ -137,8 +186,48 @@ impl Associator {
         self.gated[k * m + j]
     }
 
+    /// The global rule: the optimal assignment on `cost` (K × M, row-major) over gated
+    /// pairs, a target left without a detection costing `miss`; `out[k]` its detection.
+    pub fn global_assignment(
+        &mut self,
+        k: usize,
+        m: usize,
+        cost: &[f64],
+        gated: &[bool],
+        miss: f64,
+        out: &mut [Option<usize>],
+    ) {
+        out.fill(None);
+        // Columns: the M detections, then one "missed" column per target.
+        let w = m + k;
+        self.padded.clear();
+        self.padded.resize(k * w, FORBIDDEN);
+        for i in 0..k {
+            for j in 0..m {
+                if gated[i * m + j] {
+                    self.padded[i * w + j] = cost[i * m + j];
+                }
+            }
+            self.padded[i * w + m + i] = miss;
+        }
+        self.cols.clear();
+        self.cols.resize(k, 0);
+        if self
+            .hungarian
+            .solve(k, w, &self.padded, &mut self.cols)
+            .is_some()
+        {
+            for (i, (o, &j)) in out.iter_mut().zip(&self.cols).enumerate() {
+                if j < m && gated[i * m + j] {
+                    *o = Some(j);
+                }
+            }
+        }
+    }
+
     /// Associate `ys` with `targets`: `out[k]` becomes the index of target `k`'s detection,
     /// or `None`. `gamma` is the gate's squared Mahalanobis radius ([`gate_threshold`]).
+    /// The energies are computed only for the energy methods.
     pub fn associate(
         &mut self,
         targets: &[TargetGeometry],
@@ -155,51 +244,35 @@ impl Associator {
                 self.gated.push(g.mahalanobis_sq(&g.a_t, y) <= gamma);
             }
         }
-        out.fill(None);
-        if method != Association::Nearest {
-            self.energy.compute(targets, ys, cfg);
-        }
-        match method {
-            Association::Nearest => {
-                // Each detection goes to the nearest validated prediction (E¹'s distance).
-                self.cost.clear();
+        let mut cost = std::mem::take(&mut self.cost);
+        cost.clear();
+        let miss = match method.cost() {
+            Cost::Energy => {
+                self.energy.compute(targets, ys, cfg);
+                cost.extend_from_slice(self.energy.magnitudes());
+                MISS_COST
+            }
+            Cost::DistancePredicted | Cost::DistancePrevious => {
                 for g in targets {
-                    let c = g.e1_centre(cfg.e1_reference);
-                    self.cost.extend(ys.iter().map(|y| g.mahalanobis_sq(&c, y)));
+                    let c = if method.cost() == Cost::DistancePredicted {
+                        g.a_t
+                    } else {
+                        g.a_tm1
+                    };
+                    cost.extend(ys.iter().map(|y| g.mahalanobis_sq(&c, y)));
                 }
-                per_measurement_argmin(k, m, &self.cost, &self.gated, out);
+                // Every gated pair has a squared distance to Â(t) of at most γ.
+                2.0 * gamma
             }
-            Association::EnergyPerMeasurement => {
-                per_measurement_argmin(k, m, self.energy.magnitudes(), &self.gated, out);
-            }
-            Association::Energy => {
-                // Columns: the M detections, then one "missed" column per target.
-                let w = m + k;
-                self.cost.clear();
-                self.cost.resize(k * w, FORBIDDEN);
-                for i in 0..k {
-                    for j in 0..m {
-                        if self.gated[i * m + j] {
-                            self.cost[i * w + j] = self.energy.magnitude(i, j);
-                        }
-                    }
-                    self.cost[i * w + m + i] = MISS_COST;
-                }
-                self.cols.clear();
-                self.cols.resize(k, 0);
-                if self
-                    .hungarian
-                    .solve(k, w, &self.cost, &mut self.cols)
-                    .is_some()
-                {
-                    for (i, (o, &j)) in out.iter_mut().zip(&self.cols).enumerate() {
-                        if j < m && self.gated[i * m + j] {
-                            *o = Some(j);
-                        }
-                    }
-                }
-            }
+        };
+        if method.is_global() {
+            let gated = std::mem::take(&mut self.gated);
+            self.global_assignment(k, m, &cost, &gated, miss, out);
+            self.gated = gated;
+        } else {
+            per_measurement_argmin(k, m, &cost, &self.gated, out);
         }
+        self.cost = cost;
     }
 }
 
@@ -254,9 +327,15 @@ mod tests {
         // The construction: M₂ is nearer the van's Â(t−1) than the plane's.
         assert!((ys[1] - van.a_tm1).norm() < (ys[1] - plane.a_tm1).norm());
         let targets = [van, plane];
-        let nn = run(&targets, &ys, Association::Nearest);
-        assert_eq!(nn, [Some(1), None], "NNSF gives M₂ to the van");
-        for m in [Association::Energy, Association::EnergyPerMeasurement] {
+        let nn = run(&targets, &ys, Association::NearestPrevious);
+        assert_eq!(nn, [Some(1), None], "NN to Â(t−1) gives M₂ to the van");
+        // The energies, and nearest neighbour to the predictions Â(t), are right.
+        for m in [
+            Association::Energy,
+            Association::EnergyPerMeasurement,
+            Association::Nearest,
+            Association::NearestGlobal,
+        ] {
             assert_eq!(run(&targets, &ys, m), [Some(0), Some(1)], "{m:?}");
         }
     }
@@ -274,11 +353,72 @@ mod tests {
         // M₂ (T₂'s) is nearer T₃'s last position than T₂'s.
         assert!((ys[1] - t3.a_tm1).norm() < (ys[1] - t2.a_tm1).norm());
         let targets = [t1, t2, t3];
-        let nn = run(&targets, &ys, Association::Nearest);
-        assert_ne!(nn[1], Some(1), "NNSF must not give T₂ its own detection");
-        assert_ne!(nn[2], Some(2), "NNSF must not give T₃ its own detection");
-        for m in [Association::Energy, Association::EnergyPerMeasurement] {
+        let nn = run(&targets, &ys, Association::NearestPrevious);
+        assert_ne!(
+            nn[1],
+            Some(1),
+            "NN to Â(t−1) must not give T₂ its own detection"
+        );
+        assert_ne!(
+            nn[2],
+            Some(2),
+            "NN to Â(t−1) must not give T₃ its own detection"
+        );
+        for m in [
+            Association::Energy,
+            Association::EnergyPerMeasurement,
+            Association::Nearest,
+            Association::NearestGlobal,
+        ] {
             assert_eq!(run(&targets, &ys, m), [Some(0), Some(1), Some(2)], "{m:?}");
+        }
+    }
+
+    /// A frame where eq. (1)'s per-measurement rule and the global assignment disagree: both
+    /// detections are nearest to A, so per measurement A keeps the nearer and B gets
+    /// none; globally A-M₁ + B-M₂ (1 + 1.8² = 4.24) beats A-M₂ + B-M₁ (1.2² + 2² = 5.44) and
+    /// any miss (2γ ≈ 18.4). The same on a hand-made energy matrix.
+    #[test]
+    fn per_measurement_and_global_rules_disagree_on_a_constructed_frame() {
+        let v = Vec2::new;
+        let at = |p: Vec2| TargetGeometry {
+            a_tm2: p - v(0.0, 2.0),
+            a_tm1: p - v(0.0, 1.0),
+            a_t: p,
+            a1_tp1: p + v(0.0, 1.0),
+            cov_inv: Matrix2::identity(),
+            dynamics: SplineDynamics::new(SplineOrder::CubicBSpline),
+            t: 6.0,
+            dt_next: 1.0,
+        };
+        let targets = [at(v(0.0, 0.0)), at(v(3.0, 0.0))];
+        let ys = [v(1.0, 0.0), v(1.2, 0.0)];
+        assert_eq!(run(&targets, &ys, Association::Nearest), [Some(0), None]);
+        assert_eq!(
+            run(&targets, &ys, Association::NearestGlobal),
+            [Some(0), Some(1)]
+        );
+        let cost = [0.1, 0.2, 0.3, 0.35];
+        let gated = [true; 4];
+        let mut out = [None; 2];
+        per_measurement_argmin(2, 2, &cost, &gated, &mut out);
+        assert_eq!(out, [Some(0), None]);
+        Associator::new().global_assignment(2, 2, &cost, &gated, MISS_COST, &mut out);
+        assert_eq!(out, [Some(0), Some(1)]);
+        // A pair outside the gate is never taken, whatever its cost.
+        let gated = [true, false, true, true];
+        Associator::new().global_assignment(2, 2, &cost, &gated, MISS_COST, &mut out);
+        assert_eq!(out, [Some(0), Some(1)]);
+        per_measurement_argmin(2, 2, &cost, &gated, &mut out);
+        assert_eq!(out, [Some(0), Some(1)]);
+    }
+
+    #[test]
+    fn names_parse_and_serialise_alike() {
+        for a in Association::ALL {
+            assert_eq!(a.name().parse::<Association>(), Ok(a));
+            let json = serde_json::to_string(&a).unwrap();
+            assert_eq!(json, format!("\"{}\"", a.name()));
         }
     }
 

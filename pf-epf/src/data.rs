@@ -182,6 +182,12 @@ impl Init {
         &self.targets
     }
 
+    /// Estimate `q` and `r` from the init tracks (see [`NoiseEstimate`]); `None` when no
+    /// target has the four init frames the estimator needs.
+    pub fn estimate_noise(&self) -> Option<NoiseEstimate> {
+        NoiseEstimate::from_tracks(self.targets.iter().map(|t| t.points.as_slice()))
+    }
+
     /// The last init frame over all targets; tracking starts after it.
     pub fn last_frame(&self) -> i64 {
         self.targets
@@ -189,6 +195,106 @@ impl Init {
             .filter_map(|t| t.points.last().map(|p| p.0))
             .max()
             .unwrap_or(i64::MIN)
+    }
+}
+
+/// `q` and `r` estimated from labelled tracks by the method of moments on the chord
+/// prediction residuals.
+///
+/// For a track observed at frames `τ_0 < τ_1 < …` with detections `y_i = x_i + v_i`,
+/// `v_i ~ N(0, r²I)`, the tracker predicts `y_{i+1}` by extending the chord through `y_{i−1}`
+/// and `y_i` (the model of [`crate::model`]): the residual, per coordinate, is
+///
+/// `e_i = y_{i+1} − y_i − ρ_i (y_i − y_{i−1})`,  `ρ_i = (τ_{i+1} − τ_i)/(τ_i − τ_{i−1})`.
+///
+/// If the true path's own chord residuals are independent with variance `q²Δ_{i+1}`
+/// (`Δ_{i+1} = τ_{i+1} − τ_i`: the tracker's process noise, `q²` per frame), then
+///
+/// `E[e_i²] = q²Δ_{i+1} + r² a_i`, `a_i = 1 + (1 + ρ_i)² + ρ_i²`,
+/// `E[e_i e_{i+1}] = −r² b_i`, `b_i = (1 + ρ_{i+1}) + ρ_{i+1}(1 + ρ_i)`
+///
+/// (on evenly spaced frames `a = 6`, `b = 4`: the second differences' variance and lag-1
+/// covariance). Summing over targets, coordinates and `i`:
+///
+/// `r̂² = −Σ e_i e_{i+1} / Σ b_i`,  `q̂² = Σ (e_i² − r̂² a_i) / Σ Δ_{i+1}`,
+///
+/// both unbiased under the model ([`NoiseEstimate::r2_raw`], [`NoiseEstimate::q2_raw`]).
+/// Either can come out below zero by chance (or when the path's residuals are positively
+/// correlated, as they are for smooth turns); the estimates used are floored at 1 % of
+/// `m = Σ e_i² / Σ a_i` (all the residual variance read as detection noise), `r̂² ≥ 0.01 m`,
+/// `q̂² ≥ 0.01 m / Δ̄` (`Δ̄` the mean spacing), so `q̂`, `r̂` ≥ 0.1 √m, scale-free. `r̂ = √r̂²`
+/// and `q̂ = √q̂²` are biased low by Jensen's inequality (a few per cent with tens of
+/// residuals), and the floors bias them up when the true value is near zero: a straight
+/// path (`q = 0`) gives `q̂ ≈ 0.1 r`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct NoiseEstimate {
+    /// `q̂`, process noise standard deviation per √frame (floored).
+    pub q: f64,
+    /// `r̂`, detection noise standard deviation (floored).
+    pub r: f64,
+    /// The unbiased moment estimate of `q²`, before the floor.
+    pub q2_raw: f64,
+    /// The unbiased moment estimate of `r²`, before the floor.
+    pub r2_raw: f64,
+    /// Residuals `e_i` used, per coordinate.
+    pub residuals: usize,
+    /// Lag-1 pairs `(e_i, e_{i+1})` used, per coordinate.
+    pub pairs: usize,
+}
+
+impl NoiseEstimate {
+    /// The smallest share of `m` the floors keep.
+    pub const FLOOR: f64 = 0.01;
+
+    /// The estimate from tracks of `(frame, position)` points, frames strictly increasing
+    /// within each; `None` unless some track has at least four points (one lag-1 pair).
+    pub fn from_tracks<'a>(tracks: impl Iterator<Item = &'a [(i64, Vec2)]>) -> Option<Self> {
+        let (mut sum_cross, mut sum_b) = (0.0, 0.0);
+        let (mut sum_sq, mut sum_a, mut sum_dt) = (0.0, 0.0, 0.0);
+        let (mut residuals, mut pairs) = (0usize, 0usize);
+        for pts in tracks {
+            // (e_i, a_i, Δ_{i+1}, ρ_i) of the previous residual.
+            let mut prev: Option<(Vec2, f64)> = None;
+            for w in pts.windows(3) {
+                let [(t0, y0), (t1, y1), (t2, y2)] = [w[0], w[1], w[2]];
+                let (d1, d2) = ((t1 - t0) as f64, (t2 - t1) as f64);
+                let rho = d2 / d1;
+                let e = y2 - y1 - (y1 - y0) * rho;
+                let a = 1.0 + (1.0 + rho) * (1.0 + rho) + rho * rho;
+                sum_sq += e.norm_squared();
+                sum_a += 2.0 * a;
+                sum_dt += 2.0 * d2;
+                residuals += 1;
+                if let Some((e_prev, rho_prev)) = prev {
+                    sum_cross += e_prev.dot(&e);
+                    sum_b += 2.0 * ((1.0 + rho) + rho * (1.0 + rho_prev));
+                    pairs += 1;
+                }
+                prev = Some((e, rho));
+            }
+        }
+        if pairs == 0 || !(sum_a > 0.0 && sum_dt > 0.0) {
+            return None;
+        }
+        let r2_raw = -sum_cross / sum_b;
+        let q2_raw = (sum_sq - r2_raw * sum_a) / sum_dt;
+        let m = sum_sq / sum_a;
+        let mean_dt = sum_dt / (2.0 * residuals as f64);
+        let r2 = r2_raw.max(Self::FLOOR * m);
+        let q2 = q2_raw.max(Self::FLOOR * m / mean_dt);
+        if !(r2 > 0.0 && q2 > 0.0 && r2.is_finite() && q2.is_finite()) {
+            // Every init track exactly on a straight line at constant speed: nothing to
+            // estimate from.
+            return None;
+        }
+        Some(NoiseEstimate {
+            q: q2.sqrt(),
+            r: r2.sqrt(),
+            q2_raw,
+            r2_raw,
+            residuals,
+            pairs,
+        })
     }
 }
 

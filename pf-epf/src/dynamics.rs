@@ -2,49 +2,95 @@
 //! velocity `v` and an acceleration `a` that are re-estimated from the spline through its
 //! associated observations each time one is associated.
 //!
-//! Ref. \[4\] (El Abed et al. 2006) fits a cubic B-spline whose control points are the
-//! available observations; the paper gives no formula. We take the spline's end derivatives
-//! from its last three control points `(τ₀, P₀), (τ₁, P₁), (τ₂, P₂)` with knots at the
-//! observation frames: the local quadratic through them, differentiated at `τ₂`,
+//! Step 2 fits "the cubic B-spline which control points are extracted from the available
+//! observations"; the paper gives no formula. Three end behaviours are kept, all from the
+//! last three control points `(τ₋₂, P₋₂), (τ₋₁, P₋₁), (τ₀, P₀)` (frames and detections):
 //!
-//! `a = 2·P[τ₂, τ₁, τ₀]`, `v = P[τ₂, τ₁] + P[τ₂, τ₁, τ₀]·(τ₂ − τ₁)` (divided differences),
+//! - [`SplineOrder::CubicBSpline`] (the default, the paper's): the uniform cubic B-spline
+//!   whose control points are the detections. It approximates rather than interpolates: at
+//!   its last knot it passes through `x_end = (P₋₂ + 4P₋₁ + P₀)/6` with, per unit of the
+//!   spline parameter `u`, `x′ = (P₀ − P₋₂)/2` and `x″ = P₋₂ − 2P₋₁ + P₀`. Frame gaps are
+//!   handled by fitting the same spline to the frames, `τ(u)` with control values `τ_i`
+//!   (the B-spline of the space-time points `(τ_i, P_i)`), so the end lies at frame
+//!   `τ_end = (τ₋₂ + 4τ₋₁ + τ₀)/6` and, per frame,
+//!   `v = x′/τ′ = (P₀ − P₋₂)/(τ₀ − τ₋₂)`, `a = (x″ − v·τ″)/τ′²` with `τ′ = (τ₀ − τ₋₂)/2`,
+//!   `τ″ = τ₋₂ − 2τ₋₁ + τ₀`; on evenly spaced frames `h` apart, `v = (P₀ − P₋₂)/(2h)` and
+//!   `a = (P₋₂ − 2P₋₁ + P₀)/h²`. The model `x(t) = x_end + v·(t − τ_end) + ½a·(t − τ_end)²`
+//!   reproduces straight uniform motion exactly at any spacing.
+//! - [`SplineOrder::Quadratic`]: the end derivatives of the quadratic through the three
+//!   points, `a = 2·P[τ₀, τ₋₁, τ₋₂]`, `v = P[τ₀, τ₋₁] + P[τ₀, τ₋₁, τ₋₂]·(τ₀ − τ₋₁)`
+//!   (divided differences), exact for uniformly accelerated motion at any spacing.
+//! - [`SplineOrder::Linear`]: the chord, `a = 0`, `v = (P₀ − P₋₁)/(τ₀ − τ₋₁)`.
 //!
-//! which is exact for uniformly accelerated motion at any frame spacing (on uniform knots it
-//! is the second-order backward difference). With two control points, or with
-//! [`SplineOrder::Linear`] (the default), `a = 0` and `v` is the last chord's slope: the
-//! quadratic end multiplies the detection noise by √14 when it extrapolates one spacing
-//! ahead, against √2 for the chord, and on our scenarios that noise costs more
-//! associations than the curvature it captures (see the crate README).
+//! With fewer than three points every order uses the chord. On evenly spaced frames the
+//! B-spline's `v` and `a`, carried from `τ_end = τ₋₁` to `τ₀`, are the quadratic's end
+//! derivatives, so the two extrapolate the same displacement (the B-spline's averaging moves
+//! its end point, not its derivatives at the last detection); they differ on uneven frames
+//! (the ants). [`SplineDynamics::displacement_noise_factor`] gives how much detection noise
+//! each extrapolation carries.
 
 use crate::geometry::Vec2;
 use serde::{Deserialize, Serialize};
 
-/// The polynomial order of the end behaviour used to extrapolate.
+/// How the dynamic model is estimated from the last control points.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SplineOrder {
-    /// Constant velocity from the last two control points (`a = 0`); the default, because
-    /// the quadratic's extrapolation multiplies detection noise by √14 at unit spacing
-    /// (see [`SplineDynamics::displacement_noise_factor`]).
-    #[default]
+    /// Constant velocity from the last two control points (`a = 0`): the chord.
     Linear,
-    /// Velocity and acceleration from the last three control points.
+    /// Velocity and acceleration of the quadratic through the last three control points.
     Quadratic,
+    /// The uniform cubic B-spline whose control points are the detections (EPF step 2); the
+    /// default.
+    #[default]
+    CubicBSpline,
+}
+
+impl SplineOrder {
+    /// Every order, the default first.
+    pub const ALL: [SplineOrder; 3] = [
+        SplineOrder::CubicBSpline,
+        SplineOrder::Linear,
+        SplineOrder::Quadratic,
+    ];
+
+    /// The name used in configs and tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            SplineOrder::Linear => "linear",
+            SplineOrder::Quadratic => "quadratic",
+            SplineOrder::CubicBSpline => "cubic_b_spline",
+        }
+    }
+}
+
+impl std::str::FromStr for SplineOrder {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        pf_core::names::parse_name("spline order", &SplineOrder::ALL, SplineOrder::name, s)
+    }
 }
 
 /// The dynamic model `x(t + Δ) = x(t) + v(t)·Δ + ½·a·Δ²` of one target, with its last
-/// three control points `(frame, position)`. `Copy` and fixed-size: updating it never
-/// allocates.
+/// three control points `(frame, position)`. `v` and `a` are linear in the control points:
+/// `v = Σ_i cv_i P_i`, `a = Σ_i ca_i P_i`, with weights that depend on the frames only.
+/// `Copy` and fixed-size: updating it never allocates.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SplineDynamics {
     /// Control points, oldest first; only the first `len` are set.
     points: [(f64, Vec2); 3],
     len: usize,
     order: SplineOrder,
-    /// `v` at the last control point's frame.
+    /// `v` at frame `t_ref`.
     v: Vec2,
     /// `a`.
     a: Vec2,
+    /// The frame `v` is the velocity at: the last control point's, or `τ_end` for the
+    /// B-spline.
+    t_ref: f64,
+    /// Weights of `v` and `a` on the held control points (oldest first; zero beyond `len`).
+    cv: [f64; 3],
+    ca: [f64; 3],
 }
 
 impl SplineDynamics {
@@ -56,7 +102,15 @@ impl SplineDynamics {
             order,
             v: Vec2::zeros(),
             a: Vec2::zeros(),
+            t_ref: 0.0,
+            cv: [0.0; 3],
+            ca: [0.0; 3],
         }
+    }
+
+    /// The order this model estimates with.
+    pub fn order(&self) -> SplineOrder {
+        self.order
     }
 
     /// Add an associated observation at `frame` and re-estimate `v` and `a` (EPF step 2).
@@ -82,19 +136,46 @@ impl SplineDynamics {
     }
 
     fn estimate(&mut self) {
-        let pts = &self.points[..self.len];
-        (self.v, self.a) = match (pts, self.order) {
-            ([.., (t1, p1), (t2, p2)], SplineOrder::Linear) | ([(t1, p1), (t2, p2)], _) => {
-                ((p2 - p1) / (t2 - t1), Vec2::zeros())
+        let n = self.len;
+        let (cv, ca, t_ref) = match (n, self.order) {
+            (0, _) => ([0.0; 3], [0.0; 3], 0.0),
+            (1, _) => ([0.0; 3], [0.0; 3], self.points[0].0),
+            (2, _) | (_, SplineOrder::Linear) => {
+                let (t1, t2) = (self.points[n - 2].0, self.points[n - 1].0);
+                let mut cv = [0.0; 3];
+                cv[n - 2] = -1.0 / (t2 - t1);
+                cv[n - 1] = 1.0 / (t2 - t1);
+                (cv, [0.0; 3], t2)
             }
-            ([(t0, p0), (t1, p1), (t2, p2)], SplineOrder::Quadratic) => {
-                let d21 = (p2 - p1) / (t2 - t1);
-                let d10 = (p1 - p0) / (t1 - t0);
-                let d210 = (d21 - d10) / (t2 - t0);
-                (d21 + d210 * (t2 - t1), 2.0 * d210)
+            (_, SplineOrder::Quadratic) => {
+                let [t0, t1, t2] = self.points.map(|p| p.0);
+                // P[τ₂, τ₁] = (P₂ − P₁)/(τ₂ − τ₁), P[τ₁, τ₀] likewise,
+                // P[τ₂, τ₁, τ₀] = (P[τ₂, τ₁] − P[τ₁, τ₀])/(τ₂ − τ₀).
+                let d21 = [0.0, -1.0 / (t2 - t1), 1.0 / (t2 - t1)];
+                let d10 = [-1.0 / (t1 - t0), 1.0 / (t1 - t0), 0.0];
+                let d210: [f64; 3] = std::array::from_fn(|i| (d21[i] - d10[i]) / (t2 - t0));
+                (
+                    std::array::from_fn(|i| d21[i] + d210[i] * (t2 - t1)),
+                    d210.map(|c| 2.0 * c),
+                    t2,
+                )
             }
-            _ => (Vec2::zeros(), Vec2::zeros()),
+            (_, SplineOrder::CubicBSpline) => {
+                let [t0, t1, t2] = self.points.map(|p| p.0);
+                let tau_d1 = 0.5 * (t2 - t0);
+                let tau_d2 = t0 - 2.0 * t1 + t2;
+                let cv = [-1.0 / (t2 - t0), 0.0, 1.0 / (t2 - t0)];
+                let second = [1.0, -2.0, 1.0];
+                let ca = std::array::from_fn(|i| (second[i] - cv[i] * tau_d2) / (tau_d1 * tau_d1));
+                (cv, ca, (t0 + 4.0 * t1 + t2) / 6.0)
+            }
         };
+        self.cv = cv;
+        self.ca = ca;
+        self.t_ref = t_ref;
+        let combine = |c: &[f64; 3]| (0..n).fold(Vec2::zeros(), |s, i| s + self.points[i].1 * c[i]);
+        self.v = combine(&cv);
+        self.a = combine(&ca);
     }
 
     /// Number of control points held (at most 3).
@@ -112,39 +193,42 @@ impl SplineDynamics {
         self.a
     }
 
-    /// The velocity `v(t) = v(τ_last) + a·(t − τ_last)` at frame `t`.
-    pub fn velocity_at(&self, t: f64) -> Vec2 {
-        match self.len {
-            0 => Vec2::zeros(),
-            n => self.v + self.a * (t - self.points[n - 1].0),
+    /// The frame the model's `v` refers to: the last control point's, or the B-spline's end
+    /// `τ_end = (τ₋₂ + 4τ₋₁ + τ₀)/6` once it holds three.
+    pub fn reference_frame(&self) -> f64 {
+        self.t_ref
+    }
+
+    /// The B-spline's end point `(P₋₂ + 4P₋₁ + P₀)/6` (with three control points and
+    /// [`SplineOrder::CubicBSpline`]); otherwise the last control point.
+    pub fn end_point(&self) -> Option<Vec2> {
+        match (self.len, self.order) {
+            (0, _) => None,
+            (3, SplineOrder::CubicBSpline) => {
+                let p = self.points.map(|p| p.1);
+                Some((p[0] + p[1] * 4.0 + p[2]) / 6.0)
+            }
+            (n, _) => Some(self.points[n - 1].1),
         }
     }
 
-    /// How much detection noise the displacement carries: `d = P(t + Δ) − P(t)` with `P`
-    /// the polynomial through the control points used (the last two for
-    /// [`SplineOrder::Linear`], three for [`SplineOrder::Quadratic`]), so
-    /// `d = Σ_i c_i P_i` with `c_i = L_i(t + Δ) − L_i(t)` (Lagrange basis), and independent
+    /// The velocity `v(t) = v(t_ref) + a·(t − t_ref)` at frame `t`.
+    pub fn velocity_at(&self, t: f64) -> Vec2 {
+        match self.len {
+            0 => Vec2::zeros(),
+            _ => self.v + self.a * (t - self.t_ref),
+        }
+    }
+
+    /// How much detection noise the displacement carries: `d = v(t)·Δ + ½a·Δ²` is
+    /// `Σ_i c_i P_i` with `c_i = cv_i·Δ + ca_i·((t − t_ref)·Δ + ½Δ²)`, so independent
     /// detection noise of variance `r²` per coordinate gives `Var d = r² Σ_i c_i²`. Returns
-    /// `Σ_i c_i²` (0 with fewer than two points). It widens the gate around `Â(t)`.
+    /// `Σ_i c_i²` (0 with fewer than two points). It widens the gate around `Â(t)`. At unit
+    /// spacing and `Δ = 1`: 2 for the chord, 14 for the quadratic and for the B-spline.
     pub fn displacement_noise_factor(&self, t: f64, dt: f64) -> f64 {
-        let used = match (self.order, self.len) {
-            (_, 0 | 1) => return 0.0,
-            (SplineOrder::Linear, _) | (_, 2) => 2,
-            (SplineOrder::Quadratic, _) => 3,
-        };
-        let taus: Vec<f64> = self.points[self.len - used..self.len]
-            .iter()
-            .map(|p| p.0)
-            .collect();
-        let basis = |tau: f64, i: usize| -> f64 {
-            taus.iter()
-                .enumerate()
-                .filter(|&(j, _)| j != i)
-                .map(|(_, &tj)| (tau - tj) / (taus[i] - tj))
-                .product()
-        };
-        (0..used)
-            .map(|i| (basis(t + dt, i) - basis(t, i)).powi(2))
+        let s = (t - self.t_ref) * dt + 0.5 * dt * dt;
+        (0..self.len)
+            .map(|i| (self.cv[i] * dt + self.ca[i] * s).powi(2))
             .sum()
     }
 
@@ -202,5 +286,104 @@ mod tests {
         let u = l.updated(3.0, Vec2::new(9.0, 0.0));
         assert_eq!(u.velocity_at(3.0), Vec2::new(5.0, 0.0));
         assert_eq!(l.velocity_at(3.0), Vec2::new(3.0, 0.0));
+    }
+
+    /// The uniform cubic B-spline segment `C(u) = Σ_i B_i(u)·Q_i` with the standard basis
+    /// `B₀ = (1−u)³/6`, `B₁ = (3u³ − 6u² + 4)/6`, `B₂ = (−3u³ + 3u² + 3u + 1)/6`,
+    /// `B₃ = u³/6`, evaluated directly (not through the closed forms under test).
+    fn segment(q: [f64; 4], u: f64) -> f64 {
+        let b = [
+            (1.0 - u).powi(3) / 6.0,
+            (3.0 * u.powi(3) - 6.0 * u * u + 4.0) / 6.0,
+            (-3.0 * u.powi(3) + 3.0 * u * u + 3.0 * u + 1.0) / 6.0,
+            u.powi(3) / 6.0,
+        ];
+        (0..4).map(|i| b[i] * q[i]).sum()
+    }
+
+    /// The B-spline's end point, velocity and acceleration per frame against the closed form
+    /// `(P₋₂ + 4P₋₁ + P₀)/6`, `(P₀ − P₋₂)/(2h)`, `(P₋₂ − 2P₋₁ + P₀)/h²` on frames `h = 3`
+    /// apart, and against the space-time spline evaluated from its basis (central finite
+    /// differences in `u` at the last knot, chain rule to frames) on uneven frames.
+    #[test]
+    fn cubic_b_spline_end_matches_the_closed_form_including_uneven_gaps() {
+        let p = [
+            Vec2::new(1.0, -2.0),
+            Vec2::new(4.0, 0.5),
+            Vec2::new(6.5, 4.0),
+        ];
+        let mut d = SplineDynamics::new(SplineOrder::CubicBSpline);
+        for (t, x) in [4.0, 7.0, 10.0].into_iter().zip(p) {
+            d.push(t, x);
+        }
+        let end = (p[0] + p[1] * 4.0 + p[2]) / 6.0;
+        assert!((d.end_point().unwrap() - end).norm() < 1e-14);
+        assert_eq!(d.reference_frame(), 7.0);
+        assert!((d.velocity_at(7.0) - (p[2] - p[0]) / 6.0).norm() < 1e-14);
+        assert!((d.acceleration() - (p[0] - p[1] * 2.0 + p[2]) / 9.0).norm() < 1e-14);
+
+        // Uneven gaps (the ants' 10, 25, 35), a phantom first control point whose weight
+        // and derivatives vanish at the last knot u = 1.
+        let taus = [10.0, 25.0, 35.0];
+        let mut d = SplineDynamics::new(SplineOrder::CubicBSpline);
+        for (t, x) in taus.into_iter().zip(p) {
+            d.push(t, x);
+        }
+        // Five-point first and three-point second differences: exact for a cubic up to
+        // rounding (about 1e-16·35/ε² = 4e-9 for the second).
+        let eps = 1e-3;
+        let d1 = |f: &dyn Fn(f64) -> f64| {
+            (8.0 * (f(1.0 + eps) - f(1.0 - eps)) - (f(1.0 + 2.0 * eps) - f(1.0 - 2.0 * eps)))
+                / (12.0 * eps)
+        };
+        let d2 =
+            |f: &dyn Fn(f64) -> f64| (f(1.0 + eps) - 2.0 * f(1.0) + f(1.0 - eps)) / (eps * eps);
+        let curve = |c: [f64; 3], u: f64| segment([-50.0, c[0], c[1], c[2]], u);
+        let tau = |u: f64| curve(taus, u);
+        let (t1, t2) = (d1(&tau), d2(&tau));
+        assert!((d.reference_frame() - tau(1.0)).abs() < 1e-12);
+        for axis in 0..2 {
+            let x = |u: f64| curve(p.map(|q| q[axis]), u);
+            let (x1, x2) = (d1(&x), d2(&x));
+            let v = x1 / t1;
+            let a = (x2 * t1 - x1 * t2) / t1.powi(3);
+            assert!((d.end_point().unwrap()[axis] - x(1.0)).abs() < 1e-12);
+            assert!((d.velocity_at(tau(1.0))[axis] - v).abs() < 1e-8, "v {axis}");
+            assert!((d.acceleration()[axis] - a).abs() < 1e-8, "a {axis}");
+        }
+    }
+
+    /// Straight uniform motion is reproduced exactly by the B-spline at uneven frames; on
+    /// even frames its displacement from the last detection equals the quadratic's (and so
+    /// does its noise factor, 14 at unit spacing).
+    #[test]
+    fn cubic_b_spline_keeps_straight_motion_and_matches_the_quadratic_on_even_frames() {
+        let (x0, v0) = (Vec2::new(3.0, -1.0), Vec2::new(0.5, 2.0));
+        let mut d = SplineDynamics::new(SplineOrder::CubicBSpline);
+        for t in [10.0, 25.0, 35.0] {
+            d.push(t, x0 + v0 * t);
+        }
+        assert!(d.acceleration().norm() < 1e-12);
+        assert!((x0 + v0 * 35.0 + d.displacement(35.0, 10.0) - (x0 + v0 * 45.0)).norm() < 1e-10);
+
+        let mut b = SplineDynamics::new(SplineOrder::CubicBSpline);
+        let mut q = SplineDynamics::new(SplineOrder::Quadratic);
+        for (t, x) in [(0.0, 0.0), (1.0, 1.0), (2.0, 5.0)] {
+            b.push(t, Vec2::new(x, -x));
+            q.push(t, Vec2::new(x, -x));
+        }
+        assert!((b.displacement(2.0, 1.0) - q.displacement(2.0, 1.0)).norm() < 1e-12);
+        assert!((b.displacement_noise_factor(2.0, 1.0) - 14.0).abs() < 1e-12);
+        // Two points: the chord, whatever the order.
+        let mut two = SplineDynamics::new(SplineOrder::CubicBSpline);
+        two.push(0.0, Vec2::zeros());
+        two.push(2.0, Vec2::new(4.0, 2.0));
+        assert_eq!(two.velocity_at(2.0), Vec2::new(2.0, 1.0));
+        assert_eq!(two.acceleration(), Vec2::zeros());
+        assert_eq!(
+            "cubic_b_spline".parse::<SplineOrder>(),
+            Ok(SplineOrder::CubicBSpline)
+        );
+        assert_eq!(SplineOrder::default(), SplineOrder::CubicBSpline);
     }
 }

@@ -206,6 +206,22 @@ pub fn components(g: &TargetGeometry, y: &Vec2, cfg: &EnergyConfig) -> [f64; 3] 
     e
 }
 
+/// Eq. (1) for one pair `(k, y_j)`, term by term ([`EnergyMatrix::terms`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct EnergyTerms {
+    /// `[E¹, E², E³](k, y_j)`.
+    pub raw: [f64; 3],
+    /// `Σ_k E^l(k, y_j)` over all K targets, per component.
+    pub column_sum: [f64; 3],
+    /// `α_l = 1/Σ_k E^l(k, y_j)` (0 where the sum is 0: the component then distinguishes no
+    /// target).
+    pub alpha: [f64; 3],
+    /// `α_l E^l(k, y_j)`.
+    pub weighted: [f64; 3],
+    /// `E(k, y_j) = (1/√3)·√(Σ_l (α_l E^l)²)`.
+    pub e: f64,
+}
+
 /// The K × M energies of every target against every detection of one frame: raw
 /// components, their normalised values `α_l E^l` and the magnitude `E` of eq. (1).
 /// Row-major (`k·M + j`); buffers are reused from frame to frame.
@@ -282,6 +298,27 @@ impl EnergyMatrix {
     /// `E(k, y_j)`, eq. (1).
     pub fn magnitude(&self, k: usize, j: usize) -> f64 {
         self.e[k * self.m + j]
+    }
+
+    /// Eq. (1) for the pair `(k, y_j)` term by term: the raw components, their column sums
+    /// `Σ_k E^l(k, y_j)` over all K targets, `α_l`, `α_l E^l` and `E`.
+    pub fn terms(&self, k: usize, j: usize) -> EnergyTerms {
+        let raw = self.raw(k, j);
+        let column_sum: [f64; 3] =
+            std::array::from_fn(|l| (0..self.k).map(|i| self.raw(i, j)[l]).sum());
+        EnergyTerms {
+            raw,
+            column_sum,
+            alpha: column_sum.map(|c| {
+                if c > 0.0 && c.is_finite() {
+                    1.0 / c
+                } else {
+                    0.0
+                }
+            }),
+            weighted: self.weighted(k, j),
+            e: self.magnitude(k, j),
+        }
     }
 
     /// All magnitudes, row-major.
@@ -386,6 +423,12 @@ mod tests {
                 for i in 0..k {
                     let e = m.magnitude(i, j);
                     assert!((0.0..=1.0).contains(&e), "E = {e}");
+                    let t = m.terms(i, j);
+                    for l in 0..3 {
+                        let w = (t.alpha[l] * t.raw[l]).clamp(0.0, 1.0);
+                        assert!((t.weighted[l] - w).abs() < 1e-12, "α_l E^l term by term");
+                    }
+                    assert_eq!(t.e, e);
                     let w = m.weighted(i, j);
                     let expected = ((w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) / 3.0).sqrt();
                     assert!((e - expected).abs() < 1e-15, "eq. (1)");
@@ -416,5 +459,27 @@ mod tests {
         // E¹ from Â(t−1) = (2, 0): 1 and √2 with Σ = I.
         assert!((on[0] - 1.0).abs() < 1e-12);
         assert!((off[0] - 2f64.sqrt()).abs() < 1e-12);
+    }
+
+    /// The α normalisation is relative among targets: where a component is 0 for every
+    /// target but one (here E³, for a straight target and a turning one), that one gets
+    /// α_l E^l = 1 whatever the size of its E^l, for every detection that keeps the straight
+    /// target straight, its own included. This is the limit the report's term-by-term
+    /// tables show deciding wrong associations.
+    #[test]
+    fn a_component_nonzero_for_one_target_only_weighs_one_whatever_its_size() {
+        let v = Vec2::new;
+        let turning = geometry([v(0.0, 0.0), v(1.0, 0.0), v(2.0, 0.6)], 1.0);
+        let straight = geometry([v(0.0, 5.0), v(1.0, 5.0), v(2.0, 5.0)], 1.0);
+        let ys = [v(3.0, 5.0), v(3.5, 5.0)];
+        let mut m = EnergyMatrix::new();
+        m.compute(&[turning, straight], &ys, &EnergyConfig::default());
+        let (a, b) = (m.terms(0, 0), m.terms(0, 1));
+        assert!(a.raw[2] > 0.0 && b.raw[2] > 0.0 && a.raw[2] != b.raw[2]);
+        for j in 0..2 {
+            assert_eq!(m.raw(1, j)[2], 0.0, "the straight target's E³");
+            assert_eq!(m.weighted(0, j)[2], 1.0, "α₃E³ of the turning target");
+            assert_eq!(m.weighted(1, j)[2], 0.0);
+        }
     }
 }

@@ -10,8 +10,8 @@
 //! | input: unlabelled detections per frame, each target's first positions | [`data`] |
 //! | Section 2, Fig. 1: circumcircles, intersection areas | [`geometry`] |
 //! | Section 2: E¹, E², E³ and eq. (1) | [`energy`] |
-//! | Section 3 step 1: gates, energy minimisation, NNSF | [`association`], [`assignment`] |
-//! | Section 1 and step 2: B-spline dynamic-model update (ref. \[4\]) | [`dynamics`] |
+//! | Section 3 step 1: gates, eq. (1) per measurement (EPF), NNSF, and both under a global assignment | [`association`], [`assignment`] |
+//! | Section 1 and step 2: the cubic B-spline dynamic-model update (ref. \[4\]), chord and quadratic | [`dynamics`] |
 //! | Section 3 steps 3–6: one particle filter per target | [`model`], [`tracker`] |
 //! | Section 4: van–plane, walking men, ants; the report's experiment | [`scenario`], [`experiments`] |
 //! | Fig. 4c: REC curves; RMSE, association error rate, OSPA | [`metrics`] |

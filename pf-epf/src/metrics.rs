@@ -1,5 +1,6 @@
 //! How well tracks follow the truth: position errors (for REC curves, Fig. 4c, and RMSE),
-//! the association error rate, and OSPA (Schuhmacher, Vo & Vo 2008), which the paper does
+//! the association error rate, the fractions of target-frames without a detection or
+//! lost, and OSPA (Schuhmacher, Vo & Vo 2008), which the paper does
 //! not use but which is the field's standard multi-target metric.
 
 use crate::assignment::Hungarian;
@@ -7,7 +8,7 @@ use crate::data::Detections;
 use crate::error::{EpfError, Result};
 use crate::geometry::Vec2;
 use crate::scenario::Simulation;
-use crate::tracker::TrackResult;
+use crate::tracker::{TrackResult, TrackStatus};
 use pf_core::metrics::{RecCurve, rec_curve, rmse};
 use pf_core::params::ParamError;
 use serde::{Deserialize, Serialize};
@@ -96,6 +97,35 @@ pub fn association_errors(result: &TrackResult, detections: &Detections) -> Asso
         }
     }
     out
+}
+
+/// The fraction of target × tracked frames without an associated detection (0 for an
+/// empty result).
+pub fn missing_fraction(result: &TrackResult) -> f64 {
+    let (mut none, mut total) = (0usize, 0usize);
+    for t in &result.tracks {
+        none += t.detection.iter().filter(|d| d.is_none()).count();
+        total += t.detection.len();
+    }
+    if total == 0 {
+        0.0
+    } else {
+        none as f64 / total as f64
+    }
+}
+
+/// The fraction of target × tracked frames with `status` (0 for an empty result).
+pub fn status_fraction(result: &TrackResult, status: TrackStatus) -> f64 {
+    let (mut hit, mut total) = (0usize, 0usize);
+    for t in &result.tracks {
+        hit += t.status.iter().filter(|&&s| s == status).count();
+        total += t.status.len();
+    }
+    if total == 0 {
+        0.0
+    } else {
+        hit as f64 / total as f64
+    }
 }
 
 /// OSPA distance of order `p` with cut-off `c` between estimates `x` and truths `y`:

@@ -4,8 +4,8 @@
 //! detection. Between observed frames `Δ` apart the target moves by the dynamic model's
 //! displacement `d` ([`crate::dynamics`]) plus noise:
 //!
-//! `X_{k,t} = X_{k,t−Δ} + d + U_{k,t}`, `U ~ N(0, q²Δ·I)`;  `Y_{k,t} = X_{k,t} + V_{k,t}`,
-//! `V ~ N(0, r²·I)`.
+//! `X_{k,t} = X_{k,t−Δ} + d + U_{k,t}`, `U ~ N(0, (q²Δ + s²)·I)`;  `Y_{k,t} = X_{k,t} + V_{k,t}`,
+//! `V ~ N(0, r²·I)`; `s² = 0` except at a re-acquisition ([`Drift::extra_var`]).
 
 use crate::geometry::Vec2;
 use pf_core::filter::{Mutation, StepAt};
@@ -20,6 +20,11 @@ pub struct Drift {
     pub d: Vec2,
     /// Frames elapsed `Δ > 0`.
     pub dt: f64,
+    /// Variance added to the step's process noise `q²Δ` (per coordinate, ≥ 0): the
+    /// tracker sets it when a target takes a detection after coasting, to the growth of
+    /// the dynamic model's velocity error over the frames without one
+    /// ([`crate::tracker`]); 0 otherwise.
+    pub extra_var: f64,
 }
 
 /// The model of one target; `x0` is its last init position, the mean of `P(X_{k,0})`.
@@ -44,8 +49,8 @@ fn log_normal2(x: &Vec2, m: &Vec2, s2: f64) -> f64 {
 
 impl TargetModel {
     fn prior(&self, x_prev: &Vec2, u: Option<&Drift>) -> (Vec2, f64) {
-        let (d, dt) = u.map_or((Vec2::zeros(), 1.0), |u| (u.d, u.dt));
-        (x_prev + d, self.q * self.q * dt)
+        let (d, dt, extra) = u.map_or((Vec2::zeros(), 1.0, 0.0), |u| (u.d, u.dt, u.extra_var));
+        (x_prev + d, self.q * self.q * dt + extra)
     }
 }
 
@@ -133,6 +138,7 @@ mod tests {
         let u = Drift {
             d: Vec2::new(3.0, -1.0),
             dt: 4.0,
+            extra_var: 0.5,
         };
         let (xp, y) = (Vec2::new(1.0, 1.0), Vec2::new(5.0, 2.0));
         let at = StepAt {
@@ -163,6 +169,7 @@ mod tests {
         let u = Drift {
             d: Vec2::new(2.0, 1.0),
             dt: 3.0,
+            extra_var: 0.0,
         };
         let ys = [
             Vec2::new(13.0, 20.0),

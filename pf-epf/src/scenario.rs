@@ -1,14 +1,21 @@
 //! Synthetic versions of the paper's three test sequences (Section 4), whose videos are not
-//! available: the true paths, the detections they produce (noise, missed detections,
-//! clutter) and the init data a user would give.
+//! available, and three stress scenes a user's own data can look like: the true paths, the
+//! detections they produce (noise, missed detections, clutter) and the init data a user
+//! would give.
 //!
 //! | scenario | targets | what makes it hard |
 //! |---|---|---|
 //! | [`Scenario::VanPlane`] | 2 | at frame 6 the plane's detection is nearer the van's last position than the plane's own; the straight dynamics tell them apart (Fig. 2) |
 //! | [`Scenario::WalkingMen`] | 3 | two men cross at frame 6, where their detections are almost equidistant from both, then turn; the third walks back (Fig. 3, Table 1) |
 //! | [`Scenario::Ants`] | 6 | erratic, similar ants (speed changes, stops, turns) seen at five sparse frames 0, 10, 25, 35, 45 (Fig. 4, Table 2) |
+//! | [`Scenario::Crossing`] | 2 | straight paths at 3 units a frame crossing at 30° (T1 at the crossing point at frame 32, T2 at 34), detection noise sd 1, twice the tracker's default `r` |
+//! | [`Scenario::SparseAnts`] | 6 | erratic ants in a 50 × 50 dish seen every 5th frame (about 6 units between observations), with sharp turns and stops |
+//! | [`Scenario::SimultaneousTurns`] | 3 | three targets abreast, 4 units apart, turning left then right by 90° at the same frames (noise sd 0.5) |
 //!
-//! Init data are the noisy detections of each target at the first two observed frames.
+//! Init data are the noisy detections of each target at the first
+//! [`Scenario::init_frames`] observed frames: two for the paper's tests (the two anterior
+//! positions its energies need), eight for the stress scenes (enough for the tracker to
+//! estimate `q` and `r` from them, [`crate::data::Init::estimate_noise`]).
 
 use crate::data::{Detection, Detections, Init, InitRow};
 use crate::error::{EpfError, Result};
@@ -18,7 +25,7 @@ use rand::{Rng, RngExt};
 use rand_distr::{Distribution, Normal, Poisson, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-/// The three test sequences.
+/// The paper's three test sequences and three stress scenes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Scenario {
@@ -28,11 +35,38 @@ pub enum Scenario {
     WalkingMen,
     /// Six targets at sparse frames (Fig. 4).
     Ants,
+    /// Two targets crossing at 30°, detection noise sd 1 (stress scene).
+    Crossing,
+    /// Six erratic ants seen every 5th frame (stress scene).
+    SparseAnts,
+    /// Three targets turning at the same frames (stress scene).
+    SimultaneousTurns,
 }
 
 impl Scenario {
-    /// All three, in the paper's order.
-    pub const ALL: [Scenario; 3] = [Scenario::VanPlane, Scenario::WalkingMen, Scenario::Ants];
+    /// The paper's three, in its order (what [`crate::experiments::section4()`] runs).
+    pub const ALL: [Scenario; 3] = Scenario::PAPER;
+
+    /// The paper's three tests, in its order.
+    pub const PAPER: [Scenario; 3] = [Scenario::VanPlane, Scenario::WalkingMen, Scenario::Ants];
+
+    /// The three stress scenes: crossing with noise larger than the default `r`, sparse
+    /// frames with sharp turns and stops, simultaneous turns.
+    pub const STRESS: [Scenario; 3] = [
+        Scenario::Crossing,
+        Scenario::SparseAnts,
+        Scenario::SimultaneousTurns,
+    ];
+
+    /// Every scenario: the paper's, then the stress scenes.
+    pub const EVERY: [Scenario; 6] = [
+        Scenario::VanPlane,
+        Scenario::WalkingMen,
+        Scenario::Ants,
+        Scenario::Crossing,
+        Scenario::SparseAnts,
+        Scenario::SimultaneousTurns,
+    ];
 
     /// The name used on the command line and in file names.
     pub fn name(self) -> &'static str {
@@ -40,14 +74,39 @@ impl Scenario {
             Scenario::VanPlane => "van-plane",
             Scenario::WalkingMen => "walking-men",
             Scenario::Ants => "ants",
+            Scenario::Crossing => "crossing",
+            Scenario::SparseAnts => "sparse-ants",
+            Scenario::SimultaneousTurns => "simultaneous-turns",
         }
     }
 
-    /// The frame the paper's energy table is about (`t` in Figs. 2–4).
+    /// A title for figures and tables.
+    pub fn title(self) -> &'static str {
+        match self {
+            Scenario::VanPlane => "Van–plane",
+            Scenario::WalkingMen => "Walking men",
+            Scenario::Ants => "Ants",
+            Scenario::Crossing => "Crossing at 30°, noise sd 1",
+            Scenario::SparseAnts => "Ants every 5th frame",
+            Scenario::SimultaneousTurns => "Simultaneous turns",
+        }
+    }
+
+    /// Whether this is one of the paper's tests ([`Scenario::PAPER`]).
+    pub fn is_paper(self) -> bool {
+        Scenario::PAPER.contains(&self)
+    }
+
+    /// The frame the paper's energy table is about (`t` in Figs. 2–4); for the stress
+    /// scenes, the frame where they are hardest (the crossing, the ants' middle
+    /// observation, the first turn).
     pub fn key_frame(self) -> i64 {
         match self {
             Scenario::VanPlane | Scenario::WalkingMen => 6,
             Scenario::Ants => 35,
+            Scenario::Crossing => CROSSING_FRAME as i64,
+            Scenario::SparseAnts => 70,
+            Scenario::SimultaneousTurns => TURNS[0].0 as i64 + 1,
         }
     }
 
@@ -56,14 +115,24 @@ impl Scenario {
         match self {
             Scenario::VanPlane | Scenario::WalkingMen => (0..=12).collect(),
             Scenario::Ants => vec![0, 10, 25, 35, 45],
+            Scenario::Crossing => (0..=64).collect(),
+            Scenario::SparseAnts => (0..=20).map(|i| 5 * i).collect(),
+            Scenario::SimultaneousTurns => (0..=48).collect(),
         }
+    }
+
+    /// How many of the first observed frames make the init data.
+    pub fn init_frames(self) -> usize {
+        if self.is_paper() { 2 } else { 8 }
     }
 
     /// Standard deviation of the detection noise.
     pub fn noise(self) -> f64 {
         match self {
             Scenario::VanPlane | Scenario::WalkingMen => 0.15,
-            Scenario::Ants => 0.3,
+            Scenario::Ants | Scenario::SparseAnts => 0.3,
+            Scenario::Crossing => 1.0,
+            Scenario::SimultaneousTurns => 0.5,
         }
     }
 }
@@ -71,7 +140,7 @@ impl Scenario {
 impl std::str::FromStr for Scenario {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
-        pf_core::names::parse_name("scenario", &Scenario::ALL, Scenario::name, s)
+        pf_core::names::parse_name("scenario", &Scenario::EVERY, Scenario::name, s)
     }
 }
 
@@ -145,7 +214,8 @@ pub struct Simulation {
     pub truth: Vec<TruthTrack>,
     /// Detections of every observed frame (the init frames too), labelled with their source.
     pub detections: Detections,
-    /// The init data (the first two frames' detections of each target).
+    /// The init data (each target's detections at the first [`Scenario::init_frames`]
+    /// frames).
     pub init: Init,
 }
 
@@ -182,6 +252,122 @@ fn walking_men(t: f64) -> [Vec2; 3] {
         ),
         Vec2::new(2.0 * t + 1.0, -6.0 + t - 0.4 * turn * turn),
     ]
+}
+
+/// The frame where the crossing scene's paths meet.
+const CROSSING_FRAME: f64 = 32.0;
+
+/// The crossing scene's speed (units per frame).
+const CROSSING_SPEED: f64 = 3.0;
+
+/// Two targets at [`CROSSING_SPEED`], T1 along the x-axis through the origin at
+/// [`CROSSING_FRAME`], T2 at 30° to it through the origin two frames later: they come
+/// closest (5.8 apart, about 6 detection-noise sd) between those frames, so the scene tests
+/// noise larger than the tracker assumes rather than an ambiguous crossing.
+fn crossing(t: f64) -> [Vec2; 2] {
+    let s = CROSSING_SPEED * (t - CROSSING_FRAME);
+    let s2 = CROSSING_SPEED * (t - CROSSING_FRAME - 2.0);
+    let a = std::f64::consts::FRAC_PI_6;
+    [Vec2::new(s, 0.0), Vec2::new(s2 * a.cos(), s2 * a.sin())]
+}
+
+/// The turns of [`simultaneous_turns`]: `(first frame, frames, total angle)`.
+const TURNS: [(f64, f64, f64); 2] = [
+    (20.0, 6.0, std::f64::consts::FRAC_PI_2),
+    (34.0, 6.0, -std::f64::consts::FRAC_PI_2),
+];
+
+/// The spacing of [`simultaneous_turns`]' formation.
+const TURNS_SPACING: f64 = 4.0;
+
+/// The common heading of [`simultaneous_turns`] at frame `t`: 0, turned by each of
+/// [`TURNS`] at a constant rate over its frames.
+fn turn_heading(t: f64) -> f64 {
+    TURNS
+        .iter()
+        .map(|&(t0, n, angle)| angle * ((t - t0) / n).clamp(0.0, 1.0))
+        .sum()
+}
+
+/// Three targets abreast, [`TURNS_SPACING`] apart across the direction of motion, at unit
+/// speed with the same heading [`turn_heading`]: they never cross, and all three turn left
+/// by 90° over frames 20–26 and back right over 34–40 (15° a frame). The
+/// position integrates the heading frame by frame (the heading of frame `f` moves the
+/// target from `f` to `f + 1`).
+fn simultaneous_turns(frames: &[i64]) -> Vec<Vec<Vec2>> {
+    let last = frames.last().copied().unwrap_or(0);
+    let mut centre = Vec2::new(-20.0, 0.0);
+    let mut out: Vec<Vec<Vec2>> = (0..3).map(|_| Vec::with_capacity(frames.len())).collect();
+    for f in 0..=last {
+        if frames.contains(&f) {
+            // The offset turns with the formation: targets stay abreast.
+            let h = turn_heading(f as f64);
+            let across = Vec2::new(-h.sin(), h.cos());
+            for (k, path) in out.iter_mut().enumerate() {
+                path.push(centre + across * (TURNS_SPACING * (k as f64 - 1.0)));
+            }
+        }
+        let h = turn_heading(f as f64 + 0.5);
+        centre += Vec2::new(h.cos(), h.sin());
+    }
+    out
+}
+
+/// Six ants in a dish `[−25, 25]²` (walls reflect them), moving frame by frame: speed
+/// drawn from U(0.8, 1.6) (mean 1.2, so about 6 units between observations 5 frames
+/// apart), with probability 0.05 per frame a stop of 3–8 frames, with probability 0.08 per
+/// frame a sharp turn of ±(60°–120°), and a heading wobble N(0, 0.1²) rad per frame; they
+/// start on a circle of radius 15.
+fn sparse_ants<R: Rng + ?Sized>(frames: &[i64], rng: &mut R) -> Vec<Vec<Vec2>> {
+    let last = frames.last().copied().unwrap_or(0);
+    let half = 25.0;
+    let mut out: Vec<Vec<Vec2>> = (0..6).map(|_| Vec::with_capacity(frames.len())).collect();
+    for (k, path) in out.iter_mut().enumerate() {
+        let phi = std::f64::consts::TAU * k as f64 / 6.0;
+        let mut x = Vec2::new(15.0 * phi.cos(), 15.0 * phi.sin());
+        let mut heading = phi + std::f64::consts::PI + rng.random_range(-1.5..1.5);
+        let mut speed: f64 = rng.random_range(0.8..1.6);
+        let mut stopped = 0u32;
+        for f in 0..=last {
+            if frames.contains(&f) {
+                path.push(x);
+            }
+            if stopped > 0 {
+                stopped -= 1;
+                continue;
+            }
+            if rng.random_bool(0.05) {
+                stopped = rng.random_range(3..=8);
+                continue;
+            }
+            if rng.random_bool(0.2) {
+                speed = rng.random_range(0.8..1.6);
+            }
+            if rng.random_bool(0.08) {
+                let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+                heading += sign
+                    * rng.random_range(
+                        std::f64::consts::FRAC_PI_3..2.0 * std::f64::consts::FRAC_PI_3,
+                    );
+            }
+            let dh: f64 = StandardNormal.sample(rng);
+            heading += 0.1 * dh;
+            let mut next = x + Vec2::new(heading.cos(), heading.sin()) * speed;
+            // Reflect off the dish's walls.
+            for c in 0..2 {
+                if next[c].abs() > half {
+                    next[c] = next[c].signum() * 2.0 * half - next[c];
+                    heading = if c == 0 {
+                        std::f64::consts::PI - heading
+                    } else {
+                        -heading
+                    };
+                }
+            }
+            x = next;
+        }
+    }
+    out
 }
 
 /// Six ants with piecewise motion frame by frame: speed redrawn (or a stop) with
@@ -233,6 +419,11 @@ pub fn simulate<R: Rng + ?Sized>(cfg: &ScenarioConfig, rng: &mut R) -> Result<Si
             .map(|k| frames.iter().map(|&f| walking_men(f as f64)[k]).collect())
             .collect(),
         Scenario::Ants => ants(&frames, rng),
+        Scenario::Crossing => (0..2)
+            .map(|k| frames.iter().map(|&f| crossing(f as f64)[k]).collect())
+            .collect(),
+        Scenario::SparseAnts => sparse_ants(&frames, rng),
+        Scenario::SimultaneousTurns => simultaneous_turns(&frames),
     };
     // The scene: the paths' bounding box, padded, where clutter falls.
     let (mut lo, mut hi) = (Vec2::repeat(f64::INFINITY), Vec2::repeat(f64::NEG_INFINITY));
@@ -256,8 +447,9 @@ pub fn simulate<R: Rng + ?Sized>(cfg: &ScenarioConfig, rng: &mut R) -> Result<Si
     };
     let mut rows = Vec::new();
     let mut init_rows = Vec::new();
+    let n_init = sc.init_frames();
     for (i, &f) in frames.iter().enumerate() {
-        let is_init = i < 2;
+        let is_init = i < n_init;
         let mut frame_rows = Vec::new();
         for (k, path) in paths.iter().enumerate() {
             if !is_init && rng.random_bool(cfg.miss) {
@@ -309,4 +501,83 @@ pub fn simulate<R: Rng + ?Sized>(cfg: &ScenarioConfig, rng: &mut R) -> Result<Si
         detections: Detections::new(rows)?,
         init: Init::new(&init_rows)?,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pf_core::mc::stream_rng;
+
+    fn sim(s: Scenario, seed: u64) -> Simulation {
+        simulate(&ScenarioConfig::new(s), &mut stream_rng(seed, 0)).unwrap()
+    }
+
+    /// Every scenario parses back from its name; `ALL` stays the paper's three.
+    #[test]
+    fn names_round_trip_and_lists_partition() {
+        for s in Scenario::EVERY {
+            assert_eq!(s.name().parse::<Scenario>().unwrap(), s);
+            assert_eq!(s.is_paper(), Scenario::PAPER.contains(&s));
+            assert_ne!(Scenario::PAPER.contains(&s), Scenario::STRESS.contains(&s));
+        }
+        assert_eq!(Scenario::ALL, Scenario::PAPER);
+    }
+
+    /// Crossing: speed 3, 30° apart, at the crossing point two frames apart; 57 tracked
+    /// frames.
+    #[test]
+    fn crossing_meets_at_thirty_degrees() {
+        let s = sim(Scenario::Crossing, 1);
+        let k = Scenario::Crossing.key_frame();
+        assert!(s.truth_at(0, k).unwrap().norm() < 1e-12);
+        assert!(s.truth_at(1, k + 2).unwrap().norm() < 1e-12);
+        let v0 = s.truth_at(0, k + 1).unwrap() - s.truth_at(0, k).unwrap();
+        let v1 = s.truth_at(1, k + 1).unwrap() - s.truth_at(1, k).unwrap();
+        assert!((v0.norm() - 3.0).abs() < 1e-12 && (v1.norm() - 3.0).abs() < 1e-12);
+        assert!((v0.angle(&v1).to_degrees() - 30.0).abs() < 1e-9);
+        assert_eq!(s.init.targets()[0].points.len(), 8);
+        assert_eq!(s.frames.len() - 8, 57);
+    }
+
+    /// Simultaneous turns: always 4 apart, heading turned by 90° after the first turn and
+    /// back after the second.
+    #[test]
+    fn turns_keep_the_formation() {
+        let s = sim(Scenario::SimultaneousTurns, 1);
+        for &f in &s.frames {
+            let (a, b, c) = (
+                s.truth_at(0, f).unwrap(),
+                s.truth_at(1, f).unwrap(),
+                s.truth_at(2, f).unwrap(),
+            );
+            assert!(((a - b).norm() - 4.0).abs() < 1e-9 && ((b - c).norm() - 4.0).abs() < 1e-9);
+        }
+        let step = |f: i64| s.truth_at(1, f + 1).unwrap() - s.truth_at(1, f).unwrap();
+        assert!((step(10) - Vec2::new(1.0, 0.0)).norm() < 1e-9);
+        assert!((step(28) - Vec2::new(0.0, 1.0)).norm() < 1e-9);
+        assert!((step(44) - Vec2::new(1.0, 0.0)).norm() < 1e-9);
+    }
+
+    /// Sparse ants: six, seen every 5th frame, about 6 units between observations (the
+    /// moving frames' mean speed 1.2 × 5, less the stops), inside the dish.
+    #[test]
+    fn sparse_ants_move_about_six_units_between_observations() {
+        let (mut sum, mut n, mut stops) = (0.0, 0usize, 0usize);
+        for seed in 0..50 {
+            let s = sim(Scenario::SparseAnts, seed);
+            assert_eq!(s.truth.len(), 6);
+            for t in &s.truth {
+                for w in t.position.windows(2) {
+                    let d = (Vec2::new(w[1][0], w[1][1]) - Vec2::new(w[0][0], w[0][1])).norm();
+                    sum += d;
+                    n += 1;
+                    stops += usize::from(d < 1e-12);
+                    assert!(w[1][0].abs() <= 25.0 && w[1][1].abs() <= 25.0);
+                }
+            }
+        }
+        let mean = sum / n as f64;
+        assert!((4.0..7.0).contains(&mean), "mean displacement {mean}");
+        assert!(stops > 0, "some ants stop for a whole observation gap");
+    }
 }

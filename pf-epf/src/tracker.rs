@@ -14,8 +14,37 @@
 //!    multinomial resampling when `N_eff < ess_fraction·N`), or with none;
 //! 5. push the detection into the dynamic model (step 2, the B-spline update);
 //! 6. the estimate `X̂_{k,t}` is the weighted particle mean; it becomes `Â(t−1)` next.
+//!
+//! ## Coasting, lost tracks and re-acquisition
+//!
+//! A target that takes no detection at a frame *coasts*. The dynamic model's velocity
+//! comes from the last two or three detections and carries their noise (`√2·r` per frame
+//! for the chord); extrapolated over several frames without a detection, a velocity error
+//! beyond the gate's grows as fast as the gate does, and the target is never found again.
+//! So from its first frame without a detection, a coasting target is predicted by the
+//! least-squares line through its last [`HISTORY`] associated detections (init positions
+//! included), `Â(t) = ȳ + v̂(t − τ̄)`, whose velocity averages their noise, and the gate's
+//! `r²Σc²` term becomes that prediction's variance factor,
+//! `r²(1/n + (t − τ̄)²/Σ_i(τ_i − τ̄)²)`, plus the variance of a velocity that keeps
+//! changing while nothing is seen, `q²s(n(n+1)(2n+1)/6 − n)` (`s` the detections' mean
+//! spacing, `n` the spacings since the last one: a velocity random walk of `q²s` per
+//! spacing, the model behind `q̂`, beyond the `q²Δ` per step the particles carry). So the
+//! gate grows with the time since the last association, faster than any fixed velocity
+//! error, and its centre does not run away with one noisy chord. The particles are moved
+//! onto the line (the drift `d = Â(t) − Â(t−1)`); when the target takes a detection again,
+//! its particles' process noise at that step gets the same variance
+//! ([`Drift::extra_var`]), so that the estimate can reach the detection. With consecutive associations none of this
+//! applies and the tracker is the paper's ([`TrackerConfig::reacquire`] `= false` turns it
+//! off altogether).
+//!
+//! Targets associated at their previous step (or at init) choose first; the others (coasting
+//! or lost), whose wider gates would otherwise take a detection from a target that holds
+//! it, choose among the detections left. Each target-frame has a [`TrackStatus`]:
+//! `associated`, `coasting` (no detection for at most [`TrackerConfig::lost_after`] tracked
+//! frames in a row) or `lost` (longer); a lost track keeps its prediction and its growing
+//! gate and is re-acquired by the first detection that falls in it.
 
-use crate::association::{Association, Associator, gate_threshold};
+use crate::association::{Association, Associator, Cost, gate_threshold};
 use crate::data::{Detections, Init};
 use crate::dynamics::{SplineDynamics, SplineOrder};
 use crate::energy::{EnergyConfig, TargetGeometry};
@@ -49,13 +78,34 @@ pub struct TrackerConfig {
     /// The choices left open in the energies.
     pub energy: EnergyConfig,
     /// End behaviour of the B-spline dynamic model that moves the particles and centres
-    /// the gates (`Â(t)`).
+    /// the gates (`Â(t)`): the chord by default, because the B-spline's (and the
+    /// quadratic's) extrapolation carries 7 times the chord's detection-noise variance one
+    /// step ahead and lost tracks (see the crate README).
     pub spline: SplineOrder,
     /// End behaviour of the model behind E²'s predictions `Â₁(t+1)` and `Â₂(t+1)`. With
     /// [`SplineOrder::Linear`] the triangle `(Â(t−1), y_j, Â₂(t+1))` is always straight
     /// (`Â₂(t+1)` extends the chord through `y_j`), so E² would carry no information; the
-    /// quadratic end gives it the curvature the paper's Fig. 1c–d compares.
+    /// cubic B-spline (the default, EPF step 2) and the quadratic give it the curvature the
+    /// paper's Fig. 1c–d compares.
     pub energy_spline: SplineOrder,
+    /// A target without a detection for more than this many tracked frames in a row is
+    /// reported [`TrackStatus::Lost`] (up to it, [`TrackStatus::Coasting`]).
+    #[serde(default = "default_lost_after")]
+    pub lost_after: usize,
+    /// Coast on the least-squares line with a growing gate, and let targets that took a
+    /// detection at their previous step choose first (the module docs); `false` is the
+    /// paper's tracker, which extrapolates the dynamic model whatever happened and
+    /// associates every target at once.
+    #[serde(default = "default_reacquire")]
+    pub reacquire: bool,
+}
+
+fn default_reacquire() -> bool {
+    true
+}
+
+fn default_lost_after() -> usize {
+    TrackerConfig::default().lost_after
 }
 
 impl Default for TrackerConfig {
@@ -70,7 +120,9 @@ impl Default for TrackerConfig {
             r: 0.5,
             energy: EnergyConfig::default(),
             spline: SplineOrder::Linear,
-            energy_spline: SplineOrder::Quadratic,
+            energy_spline: SplineOrder::CubicBSpline,
+            lost_after: 3,
+            reacquire: true,
         }
     }
 }
@@ -105,6 +157,31 @@ impl TrackerConfig {
     }
 }
 
+/// What a target's track is at a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrackStatus {
+    /// It took a detection at this frame.
+    Associated,
+    /// No detection at this frame, for at most [`TrackerConfig::lost_after`] tracked frames
+    /// in a row: the position is the prediction.
+    Coasting,
+    /// No detection for more than [`TrackerConfig::lost_after`] tracked frames in a row:
+    /// the position is a prediction that nothing has confirmed for that long.
+    Lost,
+}
+
+impl TrackStatus {
+    /// The name in CSV and JSON output.
+    pub fn name(self) -> &'static str {
+        match self {
+            TrackStatus::Associated => "associated",
+            TrackStatus::Coasting => "coasting",
+            TrackStatus::Lost => "lost",
+        }
+    }
+}
+
 /// One target at one frame, as figures and recordings show it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TargetFrame {
@@ -116,6 +193,9 @@ pub struct TargetFrame {
     pub estimate: [f64; 2],
     /// The associated detection (row index), if any.
     pub detection: Option<usize>,
+    /// The track's status at this frame.
+    #[serde(default = "associated")]
+    pub status: TrackStatus,
     /// The particles after the update (empty unless recorded).
     pub particles: Vec<[f64; 2]>,
 }
@@ -138,6 +218,13 @@ pub struct Track {
     pub position: Vec<[f64; 2]>,
     /// The associated detection's row index (0-based, header excluded) per tracked frame.
     pub detection: Vec<Option<usize>>,
+    /// The track's status per tracked frame.
+    #[serde(default)]
+    pub status: Vec<TrackStatus>,
+}
+
+fn associated() -> TrackStatus {
+    TrackStatus::Associated
 }
 
 /// The tracker's output.
@@ -176,6 +263,86 @@ struct TargetState {
     a_tm2: Vec2,
     a_tm1: Vec2,
     last_frame: i64,
+    /// Tracked frames in a row without a detection.
+    misses: usize,
+    /// The last associated detections, for the coasting prediction.
+    history: History,
+}
+
+/// How many associated detections a target keeps for its coasting prediction.
+pub const HISTORY: usize = 6;
+
+/// A target's last [`HISTORY`] associated detections `(frame, position)`, oldest first, in a
+/// fixed array (no allocation per step).
+#[derive(Debug, Clone, Copy)]
+struct History {
+    points: [(f64, Vec2); HISTORY],
+    len: usize,
+}
+
+impl History {
+    fn new() -> Self {
+        History {
+            points: [(0.0, Vec2::zeros()); HISTORY],
+            len: 0,
+        }
+    }
+
+    fn push(&mut self, t: f64, y: Vec2) {
+        if self.len == HISTORY {
+            self.points.rotate_left(1);
+            self.len -= 1;
+        }
+        self.points[self.len] = (t, y);
+        self.len += 1;
+    }
+
+    /// The variance factor of a velocity random walk since the last point, in units of
+    /// `q²`: with `s` the mean spacing of the points and `n = (t − τ_last)/s` spacings
+    /// elapsed, `s·(Σ_{i=1}^{n} i² − n) = s·(n(n+1)(2n+1)/6 − n)`, the position variance
+    /// a velocity taking `q²s` per spacing adds beyond the `q²Δ` per step the particles
+    /// already carry (0 for one spacing).
+    fn velocity_walk(&self, t: f64) -> f64 {
+        let pts = &self.points[..self.len];
+        let (Some(first), Some(last)) = (pts.first(), pts.last()) else {
+            return 0.0;
+        };
+        if pts.len() < 2 {
+            return 0.0;
+        }
+        let s = (last.0 - first.0) / (pts.len() - 1) as f64;
+        let n = (t - last.0) / s;
+        (s * (n * (n + 1.0) * (2.0 * n + 1.0) / 6.0 - n)).max(0.0)
+    }
+
+    /// The least-squares line's value at `t` and its variance factor
+    /// `1/n + (t − τ̄)²/Σ(τ_i − τ̄)²` (per unit detection variance); the last point, factor
+    /// 1, with fewer than two.
+    fn predict(&self, t: f64) -> (Vec2, f64) {
+        let pts = &self.points[..self.len];
+        let n = pts.len() as f64;
+        if pts.len() < 2 {
+            return (pts.last().map_or(Vec2::zeros(), |p| p.1), 1.0);
+        }
+        let tm = pts.iter().map(|p| p.0).sum::<f64>() / n;
+        let ym = pts.iter().fold(Vec2::zeros(), |a, p| a + p.1) / n;
+        let stt: f64 = pts.iter().map(|p| (p.0 - tm).powi(2)).sum();
+        let sty = pts
+            .iter()
+            .fold(Vec2::zeros(), |a, p| a + (p.1 - ym) * (p.0 - tm));
+        let v = sty / stt;
+        (ym + v * (t - tm), 1.0 / n + (t - tm).powi(2) / stt)
+    }
+}
+
+/// Each target's filter (Section 3): `N` particles, multinomial resampling in the adaptive
+/// way, when `N_eff = 1/Σ_n (w_n)²` falls below `ess_fraction · N`.
+pub fn filter_config(cfg: &TrackerConfig) -> FilterConfig {
+    FilterConfig {
+        n_particles: cfg.n_particles,
+        resampler: Resampler::Multinomial,
+        policy: ResamplePolicy::EssBelow(EssThreshold::Fraction(cfg.ess_fraction)),
+    }
 }
 
 /// The multi-target tracker, stepped frame by frame.
@@ -189,7 +356,20 @@ pub struct Tracker {
     /// `Σ̂_k` of the last step.
     sigma: Vec<Matrix2<f64>>,
     drift: Vec<Drift>,
+    /// Per target, the process-noise growth it gets if it takes a detection now.
+    extra_var: Vec<f64>,
     out: Vec<Option<usize>>,
+    status: Vec<TrackStatus>,
+    /// The second round's association buffers (targets without a detection at their
+    /// previous step).
+    associator_late: Associator,
+    /// One round's targets (indices into `targets`), their geometry, the detections it
+    /// chooses from (indices into `ys`) and its answers; reused frame to frame.
+    round_targets: Vec<usize>,
+    round_geometry: Vec<TargetGeometry>,
+    round_ys: Vec<usize>,
+    round_positions: Vec<Vec2>,
+    round_out: Vec<Option<usize>>,
     last_frame: i64,
 }
 
@@ -212,11 +392,7 @@ impl Tracker {
     pub fn new<R: Rng + ?Sized>(init: &Init, cfg: &TrackerConfig, rng: &mut R) -> Result<Self> {
         cfg.validate()?;
         let gamma = gate_threshold(cfg.gate_probability)?;
-        let fc = FilterConfig {
-            n_particles: cfg.n_particles,
-            resampler: Resampler::Multinomial,
-            policy: ResamplePolicy::EssBelow(EssThreshold::Fraction(cfg.ess_fraction)),
-        };
+        let fc = filter_config(cfg);
         let mut targets = Vec::with_capacity(init.targets().len());
         for t in init.targets() {
             let mut dynamics = SplineDynamics::new(cfg.spline);
@@ -234,6 +410,10 @@ impl Tracker {
             };
             let mut pf = ParticleFilter::new(model, OptimalProposal, fc)?;
             pf.step(None, None, rng)?;
+            let mut history = History::new();
+            for &(f, p) in &t.points {
+                history.push(f as f64, p);
+            }
             targets.push(TargetState {
                 pf,
                 dynamics,
@@ -241,6 +421,8 @@ impl Tracker {
                 a_tm2: t.points[n - 2].1,
                 a_tm1: x0,
                 last_frame,
+                misses: 0,
+                history,
             });
         }
         let k = targets.len();
@@ -253,7 +435,15 @@ impl Tracker {
             geometry: Vec::with_capacity(k),
             sigma: Vec::with_capacity(k),
             drift: Vec::with_capacity(k),
+            extra_var: Vec::with_capacity(k),
             out: vec![None; k],
+            status: vec![TrackStatus::Associated; k],
+            associator_late: Associator::new(),
+            round_targets: Vec::with_capacity(k),
+            round_geometry: Vec::with_capacity(k),
+            round_ys: Vec::new(),
+            round_positions: Vec::new(),
+            round_out: Vec::with_capacity(k),
             last_frame: init.last_frame(),
         })
     }
@@ -263,9 +453,26 @@ impl Tracker {
         &self.ids
     }
 
-    /// The association buffers of the last step (energies, gates).
+    /// The association buffers of the last step's first round (energies, gates): every
+    /// target when all of them, or none, took a detection at their previous step; else
+    /// those that did.
     pub fn associator(&self) -> &Associator {
         &self.associator
+    }
+
+    /// Each target's status after the last step.
+    pub fn status(&self) -> &[TrackStatus] {
+        &self.status
+    }
+
+    /// The gate's squared Mahalanobis radius `γ`.
+    pub fn gamma(&self) -> f64 {
+        self.gamma
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &TrackerConfig {
+        &self.cfg
     }
 
     /// The geometry of each target at the last step (`Â(t−2)`, …, `Σ̂_k⁻¹`).
@@ -314,15 +521,29 @@ impl Tracker {
         self.geometry.clear();
         self.sigma.clear();
         self.drift.clear();
+        self.extra_var.clear();
         let (q2, r2) = (self.cfg.q * self.cfg.q, self.cfg.r * self.cfg.r);
         for s in &self.targets {
             let dt = (frame - s.last_frame) as f64;
             let t_prev = s.last_frame as f64;
-            let d = s.dynamics.displacement(t_prev, dt);
+            let (d, drift_var, extra) = if s.misses == 0 || !self.cfg.reacquire {
+                // The paper's step: the dynamic model's displacement.
+                let d = s.dynamics.displacement(t_prev, dt);
+                (
+                    d,
+                    r2 * s.dynamics.displacement_noise_factor(t_prev, dt),
+                    0.0,
+                )
+            } else {
+                // Coasting: onto the least-squares line through the last detections.
+                let (line, c) = s.history.predict(frame as f64);
+                let v = r2 * c + q2 * s.history.velocity_walk(frame as f64);
+                (line - s.a_tm1, v, v)
+            };
+            self.extra_var.push(extra);
             let a_t = s.a_tm1 + d;
             let a1_tp1 = a_t + s.shape.displacement(frame as f64, dt);
             let (_, p) = moments(s.pf.particles(), s.pf.weights());
-            let drift_var = r2 * s.dynamics.displacement_noise_factor(t_prev, dt);
             let sigma = p + Matrix2::identity() * (q2 * dt + r2 + drift_var);
             let cov_inv = sigma
                 .try_inverse()
@@ -338,22 +559,32 @@ impl Tracker {
                 dt_next: dt,
             });
             self.sigma.push(sigma);
-            self.drift.push(Drift { d, dt });
+            self.drift.push(Drift {
+                d,
+                dt,
+                extra_var: 0.0,
+            });
         }
-        self.associator.associate(
-            &self.geometry,
-            ys,
-            self.gamma,
-            self.cfg.association,
-            &self.cfg.energy,
-            &mut self.out,
-        );
+        self.associate(ys);
         for (k, s) in self.targets.iter_mut().enumerate() {
             let y = self.out[k].map(|j| ys[j]);
+            if y.is_some() {
+                self.drift[k].extra_var = self.extra_var[k];
+            }
             s.pf.step(Some(&self.drift[k]), y.as_ref(), rng)?;
             if let Some(y) = y {
                 s.dynamics.push(frame as f64, y);
                 s.shape.push(frame as f64, y);
+                s.misses = 0;
+                s.history.push(frame as f64, y);
+                self.status[k] = TrackStatus::Associated;
+            } else {
+                s.misses += 1;
+                self.status[k] = if s.misses > self.cfg.lost_after {
+                    TrackStatus::Lost
+                } else {
+                    TrackStatus::Coasting
+                };
             }
             let (mean, _) = moments(s.pf.particles(), s.pf.weights());
             s.a_tm2 = s.a_tm1;
@@ -364,9 +595,140 @@ impl Tracker {
         Ok(&self.out)
     }
 
+    /// Step 1 in two rounds: the targets that took a detection at their previous step
+    /// associate first, then the others among the detections left (in one round when all
+    /// targets are of one kind). Fills `self.out`.
+    fn associate(&mut self, ys: &[Vec2]) {
+        let fresh = |s: &TargetState| s.misses == 0;
+        let n_fresh = self.targets.iter().filter(|s| fresh(s)).count();
+        if !self.cfg.reacquire || n_fresh == 0 || n_fresh == self.targets.len() {
+            self.associator.associate(
+                &self.geometry,
+                ys,
+                self.gamma,
+                self.cfg.association,
+                &self.cfg.energy,
+                &mut self.out,
+            );
+            return;
+        }
+        self.out.fill(None);
+        self.round_ys.clear();
+        self.round_ys.extend(0..ys.len());
+        for first in [true, false] {
+            self.round_targets.clear();
+            self.round_targets.extend(
+                self.targets
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, s)| fresh(s) == first)
+                    .map(|(k, _)| k),
+            );
+            self.round_geometry.clear();
+            self.round_geometry
+                .extend(self.round_targets.iter().map(|&k| self.geometry[k]));
+            self.round_positions.clear();
+            self.round_positions
+                .extend(self.round_ys.iter().map(|&j| ys[j]));
+            self.round_out.clear();
+            self.round_out.resize(self.round_targets.len(), None);
+            let associator = if first {
+                &mut self.associator
+            } else {
+                &mut self.associator_late
+            };
+            associator.associate(
+                &self.round_geometry,
+                &self.round_positions,
+                self.gamma,
+                self.cfg.association,
+                &self.cfg.energy,
+                &mut self.round_out,
+            );
+            for (&k, o) in self.round_targets.iter().zip(&self.round_out) {
+                self.out[k] = o.map(|i| self.round_ys[i]);
+            }
+            // The detections left for the second round.
+            let out = &self.out;
+            self.round_ys.retain(|j| !out.contains(&Some(*j)));
+        }
+    }
+
     /// `X̂_{k,t}` of target `k` after the last step.
     pub fn estimate(&self, k: usize) -> Vec2 {
         self.targets[k].a_tm1
+    }
+}
+
+/// Where a tracker's `q` or `r` came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseSource {
+    /// Given by the user.
+    Given,
+    /// Estimated from the init tracks ([`Init::estimate_noise`]).
+    Estimated,
+    /// [`TrackerConfig::default`]'s, the init tracks being too short to estimate it.
+    Default,
+}
+
+impl NoiseSource {
+    /// The name in messages and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            NoiseSource::Given => "given",
+            NoiseSource::Estimated => "estimated from the init tracks",
+            NoiseSource::Default => "default: no init track has 4 frames",
+        }
+    }
+}
+
+/// The `q` and `r` a tracker uses, and where each came from.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NoiseChoice {
+    /// Process noise sd per √frame.
+    pub q: f64,
+    /// Detection noise sd.
+    pub r: f64,
+    /// Where `q` came from.
+    pub q_source: NoiseSource,
+    /// Where `r` came from.
+    pub r_source: NoiseSource,
+}
+
+impl NoiseChoice {
+    /// The given values where there are some; the others estimated from `init`'s tracks,
+    /// or [`TrackerConfig::default`]'s when no track has the four frames the estimate needs.
+    pub fn new(init: &Init, q: Option<f64>, r: Option<f64>) -> Self {
+        let est = if q.is_none() || r.is_none() {
+            init.estimate_noise()
+        } else {
+            None
+        };
+        let d = TrackerConfig::default();
+        let pick =
+            |given: Option<f64>, estimated: Option<f64>, default: f64| match (given, estimated) {
+                (Some(v), _) => (v, NoiseSource::Given),
+                (None, Some(v)) => (v, NoiseSource::Estimated),
+                (None, None) => (default, NoiseSource::Default),
+            };
+        let (q, q_source) = pick(q, est.map(|e| e.q), d.q);
+        let (r, r_source) = pick(r, est.map(|e| e.r), d.r);
+        NoiseChoice {
+            q,
+            r,
+            q_source,
+            r_source,
+        }
+    }
+
+    /// `cfg` with this `q` and `r`.
+    pub fn apply(&self, cfg: &TrackerConfig) -> TrackerConfig {
+        TrackerConfig {
+            q: self.q,
+            r: self.r,
+            ..*cfg
+        }
     }
 }
 
@@ -408,6 +770,7 @@ pub fn track<R: Rng + ?Sized>(
             target,
             position: Vec::with_capacity(frames.len()),
             detection: Vec::with_capacity(frames.len()),
+            status: Vec::with_capacity(frames.len()),
         })
         .collect();
     let mut records = Vec::new();
@@ -421,6 +784,7 @@ pub fn track<R: Rng + ?Sized>(
             let e = tracker.estimate(i);
             tr.position.push([e.x, e.y]);
             tr.detection.push(out[i].map(|j| rows.start + j));
+            tr.status.push(tracker.status()[i]);
         }
         if record != Record::Tracks {
             let mut targets = Vec::with_capacity(k);
@@ -431,6 +795,7 @@ pub fn track<R: Rng + ?Sized>(
                     gate: tracker.gate(i)?,
                     estimate: *tr.position.last().expect("pushed above"),
                     detection: *tr.detection.last().expect("pushed above"),
+                    status: tracker.status()[i],
                     particles: if record == Record::Particles {
                         tracker.particles(i).iter().map(|p| [p.x, p.y]).collect()
                     } else {
@@ -506,13 +871,23 @@ pub fn energies_at<R: Rng + ?Sized>(
     ys.clear();
     ys.extend(detections.rows()[rows.clone()].iter().map(|d| d.position));
     let mut energy_cfg = *cfg;
-    energy_cfg.association = match cfg.association {
-        Association::Nearest => Association::Energy,
-        a => a,
-    };
+    if energy_cfg.association.cost() != Cost::Energy {
+        energy_cfg.association = Association::Energy;
+    }
     tracker.cfg = energy_cfg;
     let out = tracker.step(frame, &ys, rng)?.to_vec();
-    let a = tracker.associator();
+    // The table holds every target against every detection, whatever rounds the step
+    // associated in.
+    let mut a = Associator::new();
+    let mut all = vec![None; tracker.ids().len()];
+    a.associate(
+        tracker.geometry(),
+        &ys,
+        tracker.gamma(),
+        energy_cfg.association,
+        &energy_cfg.energy,
+        &mut all,
+    );
     let e = a.energy();
     let (k, m) = (e.n_targets(), e.n_detections());
     Ok(EnergyTable {

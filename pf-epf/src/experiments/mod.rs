@@ -4,7 +4,10 @@
 //! | function | what |
 //! |---|---|
 //! | [`compare()`] | the methods on one scenario variant over `R` replications: association error rate, RMSE, OSPA, per-target errors for REC curves |
-//! | [`section4()`] | per scenario: the comparisons of its clean and clutter/miss variants, the ablation of eq. (1), REC curves (Fig. 4c), one example run and its energies at the key frame (Tables 1–2) |
+//! | [`section4()`] | per scenario: the comparisons of its clean and clutter/miss variants, the ablation of eq. (1), REC curves (Fig. 4c), one example run and its energies at the key frame (Tables 1–2), and the studies below |
+//! | [`spline_study()`] | EPF and NNSF under each end behaviour of the dynamic model (B-spline, chord, quadratic) |
+//! | [`radius_sweep()`] | EPF at each radius cap: how often E³ is non-zero and how often it (or E²) decides an association; which term decides EPF's wrong associations |
+//! | [`first_wrong_frame()`] | eq. (1) term by term (E¹, E², E³, the α normalisation) at the first frame where EPF goes wrong |
 //!
 //! ## Random streams
 //!
@@ -17,6 +20,11 @@
 //! | | method `i`'s tracking of that simulation | `(c + 1 + i, r)` |
 //! | [`section4()`], seed `s`, scenario `k` (index in [`Scenario::ALL`]) | variant `v`'s comparison | [`compare()`] with `c = s + 1000·k + 100·v` (`v` < 9) |
 //! | | the ablation of eq. (1) | [`compare()`] with `c = s + 1000·k + 900` |
+//! | | the dynamic-model study, every configuration | [`compare()`] with `c = s + 1000·k + 950` |
+//! | | the radius-cap sweep, replication `r`, every cap | simulation `(s + 1000·k + 970, r)`, tracking `(s + 1000·k + 971, r)` |
+//! | | the search for a wrong frame, run `r` | simulation `(s + 1000·k + 990, r)`, tracking `(s + 1000·k + 991, r)` |
+//! | [`section4()`], stress scene `i` (index in [`Scenario::STRESS`]), `k = 3 + i` | the 2 × 2 comparison | [`compare()`] with `c = s + 1000·k` |
+//! | | the dynamic-model study, the default cap's counts, the wrong frame | as for a scenario: `+ 950`, `+ 970`, `+ 990` |
 //! | | the example run's simulation | `(s, 50 + k)` |
 //! | | each example track, and the energies at the key frame | `(s, 60 + k)`, afresh for each |
 //!
@@ -26,17 +34,22 @@
 //! `R` > 50. They are kept so that the report's numbers stay as published.
 
 mod comparison;
+pub mod scenes;
 mod section4;
+mod studies;
 
 pub use comparison::{Comparison, ComparisonConfig, MethodSummary, compare, compare_with_progress};
 pub use section4::{
     DetectionRow, NotSmallest, PairedLoss, ScenarioResult, Section4Config, Section4Result,
-    SmallestE, TargetRec, paired_loss, paper_energies, section4, section4_with_progress,
-    smallest_e,
+    SmallestE, StressResult, TargetRec, paired_loss, paper_energies, section4,
+    section4_with_progress, smallest_e,
+};
+pub use studies::{
+    DecisiveTerms, RADIUS_CAPS, RadiusRow, RadiusSweep, SPLINE_CONFIGS, SplineRow, TermRow,
+    WrongFrame, decisive_term, first_wrong_frame, radius_sweep, spline_study,
 };
 
 use crate::association::Association;
-use crate::energy::E1Reference;
 use crate::scenario::Scenario;
 use crate::tracker::TrackerConfig;
 use serde::{Deserialize, Serialize};
@@ -45,76 +58,94 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
-    /// EPF: global energy minimisation (optimal assignment).
+    /// The paper's EPF: eq. (1), each measurement to the target of least energy
+    /// ([`Association::EnergyPerMeasurement`]).
     Epf,
-    /// EPF with the paper's per-measurement argmin of eq. (1).
+    /// The same as [`Method::Epf`] (the name of the per-measurement rule when EPF meant the
+    /// global assignment; kept so that configs naming it still read).
     EpfArgmin,
-    /// NNSF: nearest neighbour in E¹'s distance (the paper's baseline).
+    /// The paper's NNSF: each measurement to the target whose prediction `Â(t)` is nearest
+    /// ([`Association::Nearest`]).
     Nnsf,
-    /// Nearest neighbour to the dynamic model's prediction `Â(t)` (not in the paper).
+    /// The same as [`Method::Nnsf`] (the name of nearest neighbour to `Â(t)` when NNSF
+    /// measured from `Â(t−1)`; kept so that configs naming it still read).
     NnPredicted,
     /// EPF with E² left out of eq. (1) (ablation).
     EpfWithoutE2,
     /// EPF with E³ left out of eq. (1) (ablation: Table 2's "necessity of E³").
     EpfWithoutE3,
-    /// EPF with E¹ alone: NNSF's distance under the global assignment (ablation).
+    /// EPF with E¹ alone (ablation).
     EpfE1Only,
+    /// The energy E under the global one-to-one assignment ([`Association::Energy`], the
+    /// tracker's default).
+    EpfGlobal,
+    /// The distance to `Â(t)` under the global one-to-one assignment
+    /// ([`Association::NearestGlobal`]).
+    NnGlobal,
+    /// Each measurement to the target whose previous estimate `Â(t−1)` is nearest, E¹'s
+    /// distance ([`Association::NearestPrevious`]).
+    NnPrevious,
 }
 
 impl Method {
-    /// The ablations of eq. (1), EPF first and NNSF last.
+    /// The ablations of eq. (1), EPF first and nearest neighbour to `Â(t−1)` (E¹'s distance,
+    /// unnormalised) last.
     pub const ABLATIONS: [Method; 5] = [
         Method::Epf,
         Method::EpfWithoutE2,
         Method::EpfWithoutE3,
         Method::EpfE1Only,
-        Method::Nnsf,
+        Method::NnPrevious,
     ];
 
-    /// EPF, its argmin variant and both nearest-neighbour filters.
-    pub const ALL: [Method; 4] = [
+    /// The headline 2 × 2, rule (eq. (1) per measurement, global assignment) × cost (E,
+    /// distance to `Â(t)`), then nearest neighbour to `Â(t−1)`.
+    pub const ALL: [Method; 5] = [
         Method::Epf,
-        Method::EpfArgmin,
+        Method::EpfGlobal,
         Method::Nnsf,
-        Method::NnPredicted,
+        Method::NnGlobal,
+        Method::NnPrevious,
     ];
 
     /// Short label for tables and legends.
     pub fn label(self) -> &'static str {
         match self {
-            Method::Epf => "EPF",
-            Method::EpfArgmin => "EPF (argmin)",
-            Method::Nnsf => "NNSF",
-            Method::NnPredicted => "NN to Â(t)",
+            Method::Epf | Method::EpfArgmin => "EPF",
+            Method::Nnsf | Method::NnPredicted => "NNSF",
             Method::EpfWithoutE2 => "EPF without E²",
             Method::EpfWithoutE3 => "EPF without E³",
             Method::EpfE1Only => "EPF with E¹ only",
+            Method::EpfGlobal => "E, global",
+            Method::NnGlobal => "NN to Â(t), global",
+            Method::NnPrevious => "NN to Â(t−1)",
+        }
+    }
+
+    /// The association rule and cost this method uses.
+    pub fn association(self) -> Association {
+        match self {
+            Method::Epf
+            | Method::EpfArgmin
+            | Method::EpfWithoutE2
+            | Method::EpfWithoutE3
+            | Method::EpfE1Only => Association::EnergyPerMeasurement,
+            Method::Nnsf | Method::NnPredicted => Association::Nearest,
+            Method::EpfGlobal => Association::Energy,
+            Method::NnGlobal => Association::NearestGlobal,
+            Method::NnPrevious => Association::NearestPrevious,
         }
     }
 
     /// `base` set up for this method.
     pub fn configure(self, base: &TrackerConfig) -> TrackerConfig {
         let mut c = *base;
+        c.association = self.association();
         match self {
-            Method::Epf => c.association = Association::Energy,
-            Method::EpfArgmin => c.association = Association::EnergyPerMeasurement,
-            Method::Nnsf => c.association = Association::Nearest,
-            Method::NnPredicted => {
-                c.association = Association::Nearest;
-                c.energy.e1_reference = E1Reference::Predicted;
-            }
-            Method::EpfWithoutE2 => {
-                c.association = Association::Energy;
-                c.energy.components = [true, false, true];
-            }
-            Method::EpfWithoutE3 => {
-                c.association = Association::Energy;
-                c.energy.components = [true, true, false];
-            }
-            Method::EpfE1Only => {
-                c.association = Association::Energy;
-                c.energy.components = [true, false, false];
-            }
+            Method::EpfWithoutE2 => c.energy.components = [true, false, true],
+            Method::EpfWithoutE3 => c.energy.components = [true, true, false],
+            Method::EpfE1Only => c.energy.components = [true, false, false],
+            _ => {}
         }
         c
     }
@@ -130,6 +161,8 @@ pub fn tracker_for(scenario: Scenario) -> TrackerConfig {
     c.q = match scenario {
         Scenario::VanPlane | Scenario::WalkingMen => 0.3,
         Scenario::Ants => 1.0,
+        Scenario::Crossing | Scenario::SimultaneousTurns => 0.3,
+        Scenario::SparseAnts => 1.0,
     };
     c
 }

@@ -3,6 +3,10 @@
 //! comparisons of its clean and clutter/miss variants, the ablation of eq. (1), REC curves
 //! (Fig. 4c), and one example run with its energies at the key frame.
 
+use super::studies::{
+    RADIUS_CAPS, RadiusSweep, SPLINE_CONFIGS, SplineRow, WrongFrame, first_wrong_frame,
+    radius_sweep, spline_study,
+};
 use super::{Comparison, ComparisonConfig, Method, compare_with_progress, tracker_for};
 use crate::error::Result;
 use crate::metrics::rec_of;
@@ -27,6 +31,14 @@ pub struct Section4Config {
     pub variants: Vec<(f64, f64)>,
     /// Points of the REC tolerance grid.
     pub rec_points: usize,
+    /// Replications of the studies (the dynamic model's end behaviour, the radius-cap
+    /// sweep), each on the clean scenario; the runs searched for a wrong frame.
+    #[serde(default = "default_study_replications")]
+    pub study_replications: usize,
+    /// Replications of each study on a stress scene ([`Scenario::STRESS`]; its sequences
+    /// are 4 to 6 times as long as the paper's, and its differences large).
+    #[serde(default = "default_stress_replications")]
+    pub stress_replications: usize,
     /// The seed of every stream (see [the stream layout](super#random-streams)). Written
     /// once, as [`Section4Result::seed`], so it is not serialised here.
     #[serde(skip_serializing, default = "default_seed")]
@@ -38,6 +50,14 @@ pub struct Section4Config {
 
 fn default_seed() -> u64 {
     1
+}
+
+fn default_study_replications() -> usize {
+    100
+}
+
+fn default_stress_replications() -> usize {
+    25
 }
 
 /// The most variants: variant `v`'s comparison seed `seed + 1000·k + 100·v` must stay below
@@ -59,16 +79,36 @@ impl Section4Config {
             n_particles,
             variants: vec![(0.0, 0.0), (1.0, 0.1), (3.0, 0.2)],
             rec_points: 201,
+            study_replications: match scale {
+                Scale::Quick => 6,
+                Scale::Default => default_study_replications(),
+                Scale::Full => 1000,
+            },
+            stress_replications: match scale {
+                Scale::Quick => 3,
+                Scale::Default => default_stress_replications(),
+                Scale::Full => 200,
+            },
             seed: default_seed(),
             par: Par::Rayon,
         }
     }
 
     /// How many times [`section4_with_progress`] calls its `tick`: once per replication of
-    /// every comparison and ablation.
+    /// every comparison, ablation and study.
     pub fn ticks(&self) -> u64 {
-        let per_scenario = self.replications.saturating_mul(self.variants.len() + 1);
-        per_scenario.saturating_mul(Scenario::ALL.len()) as u64
+        let studies = SPLINE_CONFIGS.len() + RADIUS_CAPS.len();
+        let per_scenario = self
+            .replications
+            .saturating_mul(self.variants.len() + 1)
+            .saturating_add(self.study_replications.saturating_mul(studies));
+        // A stress scene: the comparison, the dynamic-model study, EPF at the default cap.
+        let per_stress = self
+            .stress_replications
+            .saturating_mul(1 + SPLINE_CONFIGS.len() + 1);
+        per_scenario
+            .saturating_mul(Scenario::ALL.len())
+            .saturating_add(per_stress.saturating_mul(Scenario::STRESS.len())) as u64
     }
 
     fn validate(&self) -> Result<()> {
@@ -138,6 +178,16 @@ pub struct ScenarioResult {
     /// The example run's detections, in file order (the row indices of `energies` and
     /// `example` point here).
     pub detections: Vec<DetectionRow>,
+    /// EPF and NNSF under each dynamic-model end behaviour ([`spline_study`]).
+    #[serde(default)]
+    pub splines: Vec<SplineRow>,
+    /// The radius-cap sweep and the terms that decide EPF's wrong associations
+    /// ([`radius_sweep`]).
+    #[serde(default)]
+    pub radius: RadiusSweep,
+    /// Eq. (1) term by term at the first frame where EPF goes wrong ([`first_wrong_frame`]).
+    #[serde(default)]
+    pub wrong_frame: Option<WrongFrame>,
 }
 
 impl ScenarioResult {
@@ -177,6 +227,27 @@ pub struct Section4Result {
     pub seed: u64,
     /// Per scenario, in [`Scenario::ALL`] order.
     pub scenarios: Vec<ScenarioResult>,
+    /// The association studies on each stress scene, in [`Scenario::STRESS`] order.
+    #[serde(default)]
+    pub stress: Vec<StressResult>,
+}
+
+/// The association studies on one stress scene ([`Scenario::STRESS`]), each over
+/// `stress_replications` runs of the clean scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StressResult {
+    /// The scene.
+    pub scenario: Scenario,
+    /// The 2 × 2 of rule × cost and nearest neighbour to `Â(t−1)` ([`Method::ALL`],
+    /// [`Method::NnPrevious`]); per-run details dropped.
+    pub comparison: Comparison,
+    /// EPF and NNSF under each dynamic-model end behaviour ([`spline_study`]).
+    pub splines: Vec<SplineRow>,
+    /// EPF at the default radius cap: how often E³ and E² decide, and which term decides
+    /// each wrong association ([`radius_sweep`]).
+    pub radius: RadiusSweep,
+    /// Eq. (1) term by term at the first frame where EPF goes wrong ([`first_wrong_frame`]).
+    pub wrong_frame: Option<WrongFrame>,
 }
 
 /// The paper's energy magnitudes `E(T_i, M_j)`, rows `T_i`, columns `M_j` (`M_j` being
@@ -201,6 +272,7 @@ pub fn paper_energies(s: Scenario) -> Vec<Vec<f64>> {
         .iter()
         .map(|r| r.iter().map(|v| v / 100.0).collect())
         .collect(),
+        Scenario::Crossing | Scenario::SparseAnts | Scenario::SimultaneousTurns => Vec::new(),
     }
 }
 
@@ -228,10 +300,72 @@ pub fn section4_with_progress(
         .enumerate()
         .map(|(k, &s)| scenario(cfg, k as u64, s, tick))
         .collect::<Result<Vec<_>>>()?;
+    let stress = Scenario::STRESS
+        .iter()
+        .enumerate()
+        .map(|(i, &s)| stress_scene(cfg, (Scenario::ALL.len() + i) as u64, s, tick))
+        .collect::<Result<Vec<_>>>()?;
     Ok(Section4Result {
         config: cfg.clone(),
         seed: cfg.seed,
         scenarios,
+        stress,
+    })
+}
+
+/// Stress scene `s`, seeded as the `k`-th scenario would be.
+fn stress_scene(
+    cfg: &Section4Config,
+    k: u64,
+    s: Scenario,
+    tick: &(dyn Fn() + Sync),
+) -> Result<StressResult> {
+    let mut tracker = tracker_for(s);
+    tracker.n_particles = cfg.n_particles;
+    let seed = cfg.seed.wrapping_add(1000 * k);
+    let study = ScenarioConfig::new(s);
+    let reps = cfg.stress_replications;
+    let mut methods = Method::ALL.to_vec();
+    methods.push(Method::NnPrevious);
+    let mut comparison = compare_with_progress(
+        &ComparisonConfig {
+            tracker,
+            seed,
+            par: cfg.par,
+            methods,
+            ..ComparisonConfig::new(study, reps)
+        },
+        tick,
+    )?;
+    for m in &mut comparison.methods {
+        m.errors_per_target.clear();
+        m.rmse.clear();
+        m.ospa.clear();
+        m.key_frame_right.clear();
+    }
+    let splines = spline_study(study, &tracker, reps, seed.wrapping_add(950), cfg.par, tick)?;
+    let radius = radius_sweep(
+        study,
+        &tracker,
+        &[tracker.energy.radius_cap],
+        reps,
+        seed.wrapping_add(970),
+        cfg.par,
+        tick,
+    )?;
+    let wrong_frame = first_wrong_frame(
+        study,
+        &tracker,
+        cfg.study_replications.saturating_mul(2),
+        seed.wrapping_add(990),
+        s.key_frame(),
+    )?;
+    Ok(StressResult {
+        scenario: s,
+        comparison,
+        splines,
+        radius,
+        wrong_frame,
     })
 }
 
@@ -270,6 +404,32 @@ fn scenario(
             ..base(ScenarioConfig::new(s), scenario_seed.wrapping_add(900))
         },
         tick,
+    )?;
+
+    let study = ScenarioConfig::new(s);
+    let splines = spline_study(
+        study,
+        &tracker,
+        cfg.study_replications,
+        scenario_seed.wrapping_add(950),
+        cfg.par,
+        tick,
+    )?;
+    let radius = radius_sweep(
+        study,
+        &tracker,
+        &RADIUS_CAPS,
+        cfg.study_replications,
+        scenario_seed.wrapping_add(970),
+        cfg.par,
+        tick,
+    )?;
+    let wrong_frame = first_wrong_frame(
+        study,
+        &tracker,
+        cfg.study_replications.saturating_mul(2),
+        scenario_seed.wrapping_add(990),
+        s.key_frame(),
     )?;
 
     let shown = [Method::Epf, Method::Nnsf];
@@ -312,6 +472,9 @@ fn scenario(
         rec,
         energies,
         example,
+        splines,
+        radius,
+        wrong_frame,
         frames: sim.frames,
         truth: sim.truth,
         detections: sim

@@ -2,7 +2,9 @@
 //!
 //! - `simulate` writes a scenario's detections (with a `target` truth column, −1 for
 //!   clutter), init and truth CSVs;
-//! - `track` tracks every init target through a detections CSV (EPF or NNSF);
+//! - `track` tracks every init target through a detections CSV (EPF or NNSF), with `q` and
+//!   `r` estimated from the init tracks unless given (the values used go to stderr, and to
+//!   the JSON), and a status per target-frame (`associated`, `coasting`, `lost`);
 //! - `energies` prints the E¹, E², E³ and E tables of one frame (the paper's Tables 1–2).
 
 use std::path::{Path, PathBuf};
@@ -14,7 +16,9 @@ use pf_epf::association::Association;
 use pf_epf::data::{Detection, Detections, Init, InitRow};
 use pf_epf::geometry::Vec2;
 use pf_epf::scenario::{Scenario, ScenarioConfig, simulate};
-use pf_epf::tracker::{Record, TrackerConfig, energies_at, track};
+use pf_epf::tracker::{
+    NoiseChoice, NoiseSource, Record, TrackResult, TrackStatus, TrackerConfig, energies_at, track,
+};
 use serde::Serialize;
 
 use crate::cmd::{print_json, print_line};
@@ -35,7 +39,9 @@ pub enum EpfCommand {
 /// Arguments of `pf-viz epf simulate`.
 #[derive(Debug, Clone, Args)]
 pub struct SimulateArgs {
-    /// van-plane (2 targets), walking-men (3) or ants (6, sparse frames).
+    /// The paper's van-plane (2 targets), walking-men (3) or ants (6, sparse frames); or a
+    /// stress scene: crossing (2, noise sd 1), sparse-ants (6, every 5th frame) or
+    /// simultaneous-turns (3).
     #[arg(long, value_name = "NAME")]
     pub scenario: Scenario,
     /// Mean number of clutter detections per tracked frame (Poisson), 0 to 10⁴.
@@ -70,12 +76,14 @@ pub struct TrackerArgs {
     /// Random seed.
     #[arg(long, value_name = "S", default_value_t = 0)]
     pub seed: u64,
-    /// Process noise standard deviation per √frame, q.
-    #[arg(long, value_name = "Q", default_value_t = TrackerConfig::default().q)]
-    pub q: f64,
-    /// Detection noise standard deviation, r.
-    #[arg(long, value_name = "R", default_value_t = TrackerConfig::default().r)]
-    pub r: f64,
+    /// Process noise standard deviation per √frame, q [default: estimated from the init
+    /// tracks (a target with 4 init frames is needed), else 0.5].
+    #[arg(long, value_name = "Q")]
+    pub q: Option<f64>,
+    /// Detection noise standard deviation, r [default: estimated from the init tracks
+    /// (a target with 4 init frames is needed), else 0.5].
+    #[arg(long, value_name = "R")]
+    pub r: Option<f64>,
     /// Probability mass of the validation gates.
     #[arg(long, value_name = "P", default_value_t = TrackerConfig::default().gate_probability)]
     pub gate: f64,
@@ -90,10 +98,27 @@ pub struct TrackArgs {
     /// The data and tracker settings.
     #[command(flatten)]
     pub tracker: TrackerArgs,
-    /// energy (EPF, optimal assignment), energy_per_measurement (eq. (1) argmin) or nn
-    /// (NNSF).
+    /// energy (optimal assignment on the energy E, the default), energy_per_measurement
+    /// (eq. (1): each measurement to its least-energy target, the paper's EPF), nn (the
+    /// paper's NNSF: nearest to the prediction Â(t)), nn_global (optimal assignment on the
+    /// distance to Â(t)) or nn_previous (nearest to Â(t−1), what nn meant before).
     #[arg(long, value_name = "METHOD", default_value = "energy")]
     pub association: Association,
+    /// A target without a detection for more than this many tracked frames in a row is
+    /// reported lost.
+    #[arg(long, value_name = "N", default_value_t = TrackerConfig::default().lost_after)]
+    pub lost_after: usize,
+    /// The paper's tracker: a target without a detection keeps extrapolating its dynamic
+    /// model with a gate that grows only with its particles, and every target associates
+    /// at once (by default a coasting target follows the line through its last detections,
+    /// its gate grows with the time since its last association, and targets that had a
+    /// detection at their previous step choose first).
+    #[arg(long)]
+    pub no_reacquire: bool,
+    /// Also write the tracks as CSV: one row per target and tracked frame, columns
+    /// target,frame,x,y,detection,status (detection: the row index, empty when none).
+    #[arg(long, value_name = "FILE.csv")]
+    pub out: Option<PathBuf>,
 }
 
 /// Arguments of `pf-viz epf energies`.
@@ -237,16 +262,29 @@ fn read_init(path: &Path) -> Result<Init> {
 }
 
 impl TrackerArgs {
-    fn config(&self, association: Association) -> TrackerConfig {
-        TrackerConfig {
+    /// The tracker's settings, with `q` and `r` as given or estimated from `init`.
+    fn config(&self, association: Association, init: &Init) -> (TrackerConfig, NoiseChoice) {
+        let noise = NoiseChoice::new(init, self.q, self.r);
+        let cfg = noise.apply(&TrackerConfig {
             association,
             n_particles: self.particles,
-            q: self.q,
-            r: self.r,
             gate_probability: self.gate,
             ..TrackerConfig::default()
-        }
+        });
+        (cfg, noise)
     }
+}
+
+/// The one stderr line saying which `q` and `r` the tracker used (printed after a
+/// successful run only: an error is one stderr line and nothing else).
+fn noise_note(n: &NoiseChoice) {
+    eprintln!(
+        "q = {:.4} ({}), r = {:.4} ({})",
+        n.q,
+        n.q_source.name(),
+        n.r,
+        n.r_source.name()
+    );
 }
 
 fn write_csv(path: &Path, header: &str, lines: impl Iterator<Item = String>) -> Result<()> {
@@ -347,13 +385,29 @@ fn run_simulate(a: &SimulateArgs) -> Result<()> {
     }
 }
 
+/// `track --json`: the result plus the `q` and `r` used and where they came from.
+#[derive(Serialize)]
+struct TrackJson<'a> {
+    #[serde(flatten)]
+    result: &'a TrackResult,
+    q: f64,
+    r: f64,
+    q_source: &'static str,
+    r_source: &'static str,
+}
+
 fn run_track(a: &TrackArgs) -> Result<()> {
     let detections = read_detections(&a.tracker.data)?;
     let init = read_init(&a.tracker.init)?;
-    let cfg = a.tracker.config(a.association);
+    let (mut cfg, noise) = a.tracker.config(a.association, &init);
+    cfg.lost_after = a.lost_after;
+    cfg.reacquire = !a.no_reacquire;
     cfg.validate().map_err(|e| VizError::Argument {
         message: e.to_string(),
     })?;
+    if let Some(out) = &a.out {
+        check_writable([out.as_path()])?;
+    }
     let result = track(
         &detections,
         &init,
@@ -362,8 +416,34 @@ fn run_track(a: &TrackArgs) -> Result<()> {
         &mut stream_rng(a.tracker.seed, 0),
     )
     .map_err(VizError::paper("epf"))?;
+    // After the run: an error is one stderr line and nothing else.
+    noise_note(&noise);
+    if let Some(out) = &a.out {
+        write_csv(
+            out,
+            "target,frame,x,y,detection,status",
+            result.tracks.iter().flat_map(|t| {
+                result.frames.iter().enumerate().map(move |(i, f)| {
+                    format!(
+                        "{},{f},{},{},{},{}",
+                        t.target,
+                        t.position[i][0],
+                        t.position[i][1],
+                        t.detection[i].map_or(String::new(), |j| j.to_string()),
+                        t.status[i].name()
+                    )
+                })
+            }),
+        )?;
+    }
     if a.tracker.json {
-        return print_json(&result);
+        return print_json(&TrackJson {
+            result: &result,
+            q: noise.q,
+            r: noise.r,
+            q_source: source_key(noise.q_source),
+            r_source: source_key(noise.r_source),
+        });
     }
     print_line(format_args!(
         "{} ({}): {} targets over {} frames ({}..={})",
@@ -376,9 +456,12 @@ fn run_track(a: &TrackArgs) -> Result<()> {
     ))?;
     for t in &result.tracks {
         let hits = t.detection.iter().filter(|d| d.is_some()).count();
+        let lost = t.status.iter().filter(|&&s| s == TrackStatus::Lost).count();
         let last = t.position[t.position.len() - 1];
+        let last_status = t.status.last().map_or("", |s| s.name());
         print_line(format_args!(
-            "  target {}: {hits}/{} frames associated, last position ({:.3}, {:.3})",
+            "  target {}: {hits}/{} frames associated, {lost} lost, last position ({:.3}, \
+             {:.3}), {last_status}",
             t.target,
             t.detection.len(),
             last[0],
@@ -386,6 +469,15 @@ fn run_track(a: &TrackArgs) -> Result<()> {
         ))?;
     }
     Ok(())
+}
+
+/// The JSON value of a [`NoiseSource`].
+fn source_key(s: NoiseSource) -> &'static str {
+    match s {
+        NoiseSource::Given => "given",
+        NoiseSource::Estimated => "estimated",
+        NoiseSource::Default => "default",
+    }
 }
 
 #[derive(Serialize)]
@@ -415,7 +507,7 @@ struct EnergiesJson {
 fn run_energies(a: &EnergiesArgs) -> Result<()> {
     let detections = read_detections(&a.tracker.data)?;
     let init = read_init(&a.tracker.init)?;
-    let cfg = a.tracker.config(Association::Energy);
+    let (cfg, noise) = a.tracker.config(Association::Energy, &init);
     cfg.validate().map_err(|e| VizError::Argument {
         message: e.to_string(),
     })?;
@@ -432,6 +524,7 @@ fn run_energies(a: &EnergiesArgs) -> Result<()> {
         },
         e => VizError::paper("epf")(e),
     })?;
+    noise_note(&noise);
     let [w1, w2, w3] = t.weighted;
     let [r1, r2, r3] = t.raw;
     let out = EnergiesJson {
