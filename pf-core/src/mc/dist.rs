@@ -17,8 +17,10 @@
 //!   one-process run, so each replication's result is the one a one-process run computes.
 //! * Every rank receives every rank's results (an all-gather: the program continues
 //!   identically on every rank, whatever it does with them next) and concatenates them in
-//!   rank order, which is replication order. The results cross ranks encoded by postcard, a
-//!   serde format that writes an `f64` as its eight bytes, so they arrive bit for bit.
+//!   rank order, which is replication order. The results cross ranks as MessagePack
+//!   (rmp-serde), which writes an `f64` as its eight bytes, so they arrive bit for bit; structs
+//!   go as maps of their field names, so a field that `skip_serializing_if` leaves out
+//!   decodes to its default, as it does from JSON.
 //! * A failing replication sends a marker with its index and message in place of results:
 //!   every rank takes part in every exchange, so none waits for a rank that gave up, and
 //!   every rank returns the same error, [`CoreError::Replication`], for the lowest failing
@@ -400,14 +402,14 @@ mod imp {
             };
             // Encoding a block of plain numbers cannot fail; a type that cannot be encoded
             // is sent as a failure, so the exchange still happens.
-            let bytes = postcard::to_stdvec(&sent).or_else(|e| {
+            let bytes = rmp_serde::to_vec_named(&sent).or_else(|e| {
                 let message = format!("the results of rank {rank} cannot be encoded: {e}");
                 let instead: Sent<'_, T> = Sent::Failed {
                     replication: lo as u64,
                     message: &message,
                     panicked: false,
                 };
-                postcard::to_stdvec(&instead)
+                rmp_serde::to_vec_named(&instead)
             });
             let bytes = bytes.unwrap_or_default();
             let all = announce([study, seed, n as u64, bytes.len() as u64]);
@@ -453,7 +455,7 @@ mod imp {
                     out.append(&mut mine);
                     continue;
                 }
-                let decoded: Received<T> = postcard::from_bytes(part).map_err(|e| {
+                let decoded: Received<T> = rmp_serde::from_slice(part).map_err(|e| {
                     E::from(error(format!(
                         "the results of rank {k} for study #{study} cannot be decoded: {e}"
                     )))
@@ -535,8 +537,8 @@ mod imp {
         use super::*;
 
         /// What a rank sends decodes to the same values bit for bit: NaN payloads, −0,
-        /// subnormals, infinities, nested vectors and options; a failure keeps its index
-        /// and message.
+        /// subnormals, infinities, nested vectors and options, fields skipped when empty; a
+        /// failure keeps its index and message.
         #[test]
         fn results_cross_ranks_bit_for_bit() {
             let odd = [
@@ -551,8 +553,8 @@ mod imp {
                 .enumerate()
                 .map(|(i, &x)| (x, (i % 2 == 0).then(|| odd.to_vec()), i == 3))
                 .collect();
-            let bytes = postcard::to_stdvec(&Sent::Done(&block)).unwrap();
-            let Received::Done(back) = postcard::from_bytes::<Received<_>>(&bytes).unwrap() else {
+            let bytes = rmp_serde::to_vec_named(&Sent::Done(&block)).unwrap();
+            let Received::Done(back) = rmp_serde::from_slice::<Received<_>>(&bytes).unwrap() else {
                 panic!("a block decoded as a failure")
             };
             let bits = |v: &[(f64, Option<Vec<f64>>, bool)]| {
@@ -571,8 +573,8 @@ mod imp {
                 message: "at step 3: boom",
                 panicked: false,
             };
-            let bytes = postcard::to_stdvec(&sent).unwrap();
-            match postcard::from_bytes::<Received<f64>>(&bytes).unwrap() {
+            let bytes = rmp_serde::to_vec_named(&sent).unwrap();
+            match rmp_serde::from_slice::<Received<f64>>(&bytes).unwrap() {
                 Received::Failed {
                     replication,
                     message,
@@ -583,6 +585,38 @@ mod imp {
                 ),
                 Received::Done(_) => panic!("a failure decoded as results"),
             }
+            // A field left out by `skip_serializing_if` decodes to its default.
+            #[derive(Debug, PartialEq, Serialize, Deserialize)]
+            struct Sparse {
+                x: f64,
+                #[serde(default, skip_serializing_if = "Vec::is_empty")]
+                records: Vec<u8>,
+                y: Option<f64>,
+            }
+            let block = [
+                Sparse {
+                    x: 1.5,
+                    records: Vec::new(),
+                    y: Some(-0.0),
+                },
+                Sparse {
+                    x: f64::NAN,
+                    records: vec![7],
+                    y: None,
+                },
+            ];
+            let bytes = rmp_serde::to_vec_named(&Sent::Done(&block)).unwrap();
+            let Received::Done(back) = rmp_serde::from_slice::<Received<Sparse>>(&bytes).unwrap()
+            else {
+                panic!("a block decoded as a failure")
+            };
+            assert_eq!((back[0].x, &back[0].records), (1.5, &Vec::new()));
+            assert_eq!(back[0].y.map(f64::to_bits), Some((-0.0f64).to_bits()));
+            assert_eq!(
+                (back[1].x.to_bits(), &back[1].records),
+                (f64::NAN.to_bits(), &vec![7])
+            );
+
             let e: CoreError = fail_everywhere(5, "boom".into(), false);
             assert_eq!(e.to_string(), "replication 5: boom");
         }
