@@ -81,6 +81,23 @@ pub enum CoreError {
         /// How many.
         len: usize,
     },
+    /// Replication `replication` of a Monte Carlo study dealt to MPI ranks failed (see
+    /// [`mc::dist`](crate::mc::dist)); every rank reports it, with the failing rank's
+    /// message, which is all that crosses ranks.
+    #[error("replication {replication}: {message}")]
+    Replication {
+        /// The replication's index `r`.
+        replication: usize,
+        /// The error it failed with, as text.
+        message: String,
+    },
+    /// The MPI ranks of a distributed run did not run the same study (their programs took
+    /// different paths), or their results could not be exchanged or decoded.
+    #[error("MPI: {message}")]
+    Distributed {
+        /// What went wrong, naming the ranks and studies involved.
+        message: String,
+    },
 }
 
 impl CoreError {

@@ -6,6 +6,10 @@
 //! target is left as it was. A symbolic link is followed, so its target is replaced and the
 //! link kept; a device, FIFO or socket (`/dev/null`) is written in place, never replaced.
 //! Errors name the user's path, never the temporary file.
+//!
+//! In an MPI run (feature `mpi`) only rank 0 writes: on every other rank each function here
+//! does nothing and succeeds, so the ranks run the same program and one copy of each file
+//! is written.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{BufWriter, ErrorKind, Write};
@@ -138,6 +142,11 @@ fn commit(tmp: &Path, target: &Path, shown: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Whether this process writes files: always, except on MPI ranks other than 0.
+fn writes() -> bool {
+    pf_core::mc::dist::is_root()
+}
+
 /// Write `path` atomically: `write` fills a buffered writer on a temporary sibling, which is
 /// renamed over `path` only if `write` and the flush succeed.
 ///
@@ -152,6 +161,9 @@ pub fn write_atomic<F>(path: &Path, write: F) -> Result<()>
 where
     F: FnOnce(&mut dyn Write) -> Result<()>,
 {
+    if !writes() {
+        return Ok(());
+    }
     match target(path)? {
         Target::Special(dev) => write_buffered(open_special(&dev, path)?, path, write),
         Target::File(real) => {
@@ -197,6 +209,9 @@ pub fn write_atomic_path<F>(path: &Path, write: F) -> Result<()>
 where
     F: FnOnce(&Path) -> Result<()>,
 {
+    if !writes() {
+        return Ok(());
+    }
     let target = target(path)?;
     let dir = match &target {
         Target::File(real) => real.parent().unwrap_or(Path::new("")).to_owned(),
@@ -254,6 +269,9 @@ pub fn write_json<T: Serialize + ?Sized>(path: &Path, value: &T) -> Result<()> {
 /// # Errors
 /// An I/O error naming the first path that cannot be written.
 pub fn check_writable<'a>(paths: impl IntoIterator<Item = &'a Path>) -> Result<()> {
+    if !writes() {
+        return Ok(());
+    }
     for p in paths {
         target(p)?;
     }
@@ -266,6 +284,9 @@ pub fn check_writable<'a>(paths: impl IntoIterator<Item = &'a Path>) -> Result<(
 /// # Errors
 /// [`VizError::OutDir`] if the directory cannot be created or written to.
 pub fn prepare_out_dir(dir: &Path) -> Result<()> {
+    if !writes() {
+        return Ok(());
+    }
     let out_dir = |source| VizError::OutDir {
         path: dir.to_owned(),
         source,

@@ -92,6 +92,7 @@ pub struct Comparison {
     pub methods: Vec<MethodSummary>,
 }
 
+#[derive(Serialize, Deserialize)]
 struct RunOutcome {
     key_frame_right: bool,
     error_rate: f64,

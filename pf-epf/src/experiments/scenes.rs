@@ -333,6 +333,7 @@ pub fn track_cv_kalman(
 /// Replication 0's observed frames and true paths, for the figure.
 type ExampleTruth = Option<(Vec<i64>, Vec<TruthTrack>)>;
 
+#[derive(Serialize, Deserialize)]
 struct Outcome {
     noise: Option<NoiseEstimate>,
     per_method: Vec<[f64; 4]>,

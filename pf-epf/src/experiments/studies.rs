@@ -105,7 +105,7 @@ pub struct RadiusRow {
 pub const RADIUS_CAPS: [f64; 5] = [1.0, 2.0, 5.0, 20.0, 1e6];
 
 /// Per-run counts of the instrumented EPF run.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
 struct Counts {
     target_frames: usize,
     e3_active: usize,

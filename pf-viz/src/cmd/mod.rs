@@ -39,7 +39,11 @@ pub fn print_json<T: Serialize + ?Sized>(value: &T) -> Result<()> {
 /// # Errors
 /// [`VizError::Io`] naming `<stdout>` when the write or flush fails (broken pipe, full
 /// disk, closed descriptor).
+/// In an MPI run only rank 0 prints; the other ranks' lines are dropped.
 pub fn print_line(line: impl Display) -> Result<()> {
+    if !pf_core::mc::dist::is_root() {
+        return Ok(());
+    }
     let mut out = std::io::stdout().lock();
     writeln!(out, "{line}")
         .and_then(|()| out.flush())

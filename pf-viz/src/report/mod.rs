@@ -22,6 +22,7 @@ mod page;
 use std::collections::BTreeMap;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, PoisonError};
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -40,6 +41,12 @@ pub const SECTIONS: &[Section] = &[
     dredge::SECTION,
     epf::SECTION,
 ];
+
+/// Sections that every MPI rank runs whole ([`pf_core::mc::dist::local`]) instead of
+/// dealing their studies to ranks: `mpf`, whose Table II sizes each partition's Monte
+/// Carlo study by measured time, which differs between ranks. Its studies take seconds
+/// at every scale.
+pub const RANK_LOCAL: &[&str] = &["mpf"];
 
 /// The sample standard deviation of replicated values (divisor `R − 1`).
 pub(crate) fn sd(v: &[f64]) -> f64 {
@@ -150,31 +157,74 @@ pub struct Context<'a> {
     pub progress: &'a Progress,
 }
 
-/// Progress bars on stderr, one per experiment, drawn only when stderr is a terminal.
-/// Nothing ever goes to stdout.
+/// Progress bars on stderr, one per experiment, drawn only when stderr is a terminal and
+/// only on MPI rank 0 (see [`Bar`]). Nothing ever goes to stdout.
 #[derive(Debug, Default)]
 pub struct Progress {
     multi: MultiProgress,
 }
 
 impl Progress {
-    /// Bars drawn on stderr (hidden when it is not a terminal).
+    /// Bars drawn on stderr (hidden when it is not a terminal, and on MPI ranks other
+    /// than 0).
     pub fn new() -> Self {
+        let target = if pf_core::mc::dist::is_root() {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        };
         Progress {
-            multi: MultiProgress::with_draw_target(ProgressDrawTarget::stderr()),
+            multi: MultiProgress::with_draw_target(target),
         }
     }
 
     /// A new bar of `len` units labelled `label`, with an ETA; finish it with
-    /// `finish_and_clear`.
-    pub fn bar(&self, label: &str, len: u64) -> ProgressBar {
+    /// [`Bar::finish_and_clear`].
+    pub fn bar(&self, label: &str, len: u64) -> Bar {
         let style =
             ProgressStyle::with_template("{prefix:>18} [{bar:30}] {pos}/{len} {msg} (eta {eta})")
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
                 .progress_chars("=> ");
         let bar = self.multi.add(ProgressBar::new(len).with_style(style));
         bar.set_prefix(label.to_owned());
-        bar
+        Bar {
+            bar,
+            len,
+            done: Mutex::new(0.0),
+        }
+    }
+}
+
+/// One progress bar. In an MPI run rank 0 sees only its own share of a study's
+/// replications, so a tick counted while a study is dealt to ranks counts
+/// [`progress_weight`](pf_core::mc::dist::progress_weight) times (the study's replications
+/// over rank 0's share): the bar shows the whole study's progress, reaching its end when rank
+/// 0's share is done. Without MPI every tick counts once.
+#[derive(Debug)]
+pub struct Bar {
+    bar: ProgressBar,
+    len: u64,
+    /// Weighted ticks so far.
+    done: Mutex<f64>,
+}
+
+impl Bar {
+    /// Count `delta` ticks.
+    pub fn inc(&self, delta: u64) {
+        let w = pf_core::mc::dist::progress_weight();
+        let mut done = self.done.lock().unwrap_or_else(PoisonError::into_inner);
+        *done += delta as f64 * w;
+        self.bar.set_position((done.round() as u64).min(self.len));
+    }
+
+    /// Show `msg` beside the bar.
+    pub fn set_message(&self, msg: impl Into<std::borrow::Cow<'static, str>>) {
+        self.bar.set_message(msg);
+    }
+
+    /// Remove the bar.
+    pub fn finish_and_clear(&self) {
+        self.bar.finish_and_clear();
     }
 }
 
@@ -339,7 +389,12 @@ fn run_sections(opts: &Options, selected: &[&'static Section]) -> Result<Summary
     let mut outcomes: Vec<(Section, Outcome)> = Vec::with_capacity(selected.len());
     for s in selected {
         overall.set_message(s.title);
-        outcomes.push((**s, run_section(&ctx, s)));
+        let outcome = if RANK_LOCAL.contains(&s.name) {
+            pf_core::mc::dist::local(|| run_section(&ctx, s))
+        } else {
+            run_section(&ctx, s)
+        };
+        outcomes.push((**s, outcome));
         overall.inc(1);
     }
     overall.finish_and_clear();
@@ -364,9 +419,13 @@ fn run_sections(opts: &Options, selected: &[&'static Section]) -> Result<Summary
             .filter_map(|(s, o)| o.as_ref().err().map(|e| (s.name, e.clone())))
             .collect(),
     };
-    write_json(&ctx.path(SUMMARY), &summary)?;
-    page::write_html(&ctx.path(INDEX), &summary, &outcomes)?;
-    page::write_markdown(&ctx.path(MARKDOWN), &summary, &outcomes)?;
+    // Only rank 0 writes (the other ranks' figures were never written, and the HTML page
+    // reads them back).
+    if pf_core::mc::dist::is_root() {
+        write_json(&ctx.path(SUMMARY), &summary)?;
+        page::write_html(&ctx.path(INDEX), &summary, &outcomes)?;
+        page::write_markdown(&ctx.path(MARKDOWN), &summary, &outcomes)?;
+    }
     Ok(summary)
 }
 

@@ -2,11 +2,15 @@
 //!
 //! Replication `r` of a run with seed `s` draws from its own stream, derived from `(s, r)`
 //! alone. Replications run in parallel with rayon and are collected in order of `r`, so the
-//! results are bit-identical whatever the number of threads.
+//! results are bit-identical whatever the number of threads, and, for [`try_replicate`]
+//! through [`dist`] (feature `mpi`), whatever the number of MPI ranks.
+
+pub mod dist;
 
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rayon::prelude::*;
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 /// The engine's generator: xoshiro256++ (Blackman & Vigna 2021), fast, 2²⁵⁶ − 1 period,
@@ -95,6 +99,10 @@ pub enum Par {
 }
 
 /// Run `f(r, rng_r)` for `r = 0..n` and collect the results in order of `r`.
+///
+/// Always on this process, for results of any type; in an MPI run every rank that calls it
+/// computes every replication. The studies that MPI ranks share go through
+/// [`try_replicate`], whose results can be serialised to cross ranks ([`dist`]).
 pub fn replicate<T, F>(seed: u64, n: usize, par: Par, f: F) -> Vec<T>
 where
     T: Send,
@@ -127,11 +135,14 @@ where
 /// [`CoreError::TooLarge`](crate::CoreError::TooLarge) for more than
 /// [`MAX_COUNT`](crate::limits::MAX_COUNT) replications (a count from user input), or
 /// results that would not fit in the machine's memory, both checked before anything runs;
-/// otherwise the error of the lowest-numbered failing replication.
+/// otherwise the error of the lowest-numbered failing replication. In an MPI run ([`dist`])
+/// that error is [`CoreError::Replication`](crate::CoreError::Replication) with its index
+/// and message, on every rank; ranks whose programs took different paths get
+/// [`CoreError::Distributed`](crate::CoreError::Distributed).
 pub fn try_replicate<T, E, F>(seed: u64, n: usize, par: Par, f: F) -> Result<Vec<T>, E>
 where
-    T: Send,
-    E: Send + From<crate::CoreError>,
+    T: Send + Serialize + DeserializeOwned,
+    E: Send + std::fmt::Display + From<crate::CoreError>,
     F: Fn(usize, &mut PfRng) -> Result<T, E> + Sync,
 {
     const WHAT: &str = "the number of replications";
@@ -141,6 +152,9 @@ where
     // allocation or a process killed half-way.
     let both = size_of::<Result<T, E>>() + size_of::<T>();
     crate::limits::check_memory(WHAT, n, n.saturating_mul(both))?;
+    if let Some(study) = dist::Study::begin(seed, n) {
+        return study.run(par, f);
+    }
     let mut all: Vec<Result<T, E>> = crate::limits::try_with_capacity(WHAT, n)?;
     let mut ok: Vec<T> = crate::limits::try_with_capacity(WHAT, n)?;
     replicate_into(seed, n, par, f, &mut all);
@@ -241,14 +255,14 @@ mod tests {
         let r = try_replicate(0, usize::MAX, Par::Rayon, fail_from_3);
         assert!(matches!(r, Err(CoreError::TooLarge { .. })), "{r:?}");
         // So is a count within the limit whose results would not fit (2³² results of
-        // 4 KiB, 16 TiB), before any replication runs (on Linux, where the machine's memory
+        // 4 KiB, 16 TiB, as nested arrays, which serde encodes up to 32 long), before any replication runs (on Linux, where the machine's memory
         // is known; elsewhere the reservation alone decides).
         #[cfg(target_os = "linux")]
         {
             let ran = std::sync::atomic::AtomicBool::new(false);
             let r = try_replicate(0, crate::limits::MAX_COUNT, Par::Rayon, |_, _| {
                 ran.store(true, std::sync::atomic::Ordering::Relaxed);
-                Ok::<_, CoreError>([0u8; 4096])
+                Ok::<_, CoreError>([[[0u8; 32]; 32]; 4])
             });
             assert!(matches!(r, Err(CoreError::TooLarge { .. })));
             assert!(!ran.into_inner());
