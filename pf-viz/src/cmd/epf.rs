@@ -275,9 +275,13 @@ impl TrackerArgs {
     }
 }
 
-/// The one stderr line saying which `q` and `r` the tracker used (printed after a
-/// successful run only: an error is one stderr line and nothing else).
+/// The one stderr line saying which `q` and `r` the tracker used, by rank 0, after the
+/// output was written (an error, a closed pipe included, is one stderr line and nothing
+/// else).
 fn noise_note(n: &NoiseChoice) {
+    if !pf_core::mc::dist::is_root() {
+        return;
+    }
     eprintln!(
         "q = {:.4} ({}), r = {:.4} ({})",
         n.q,
@@ -416,8 +420,6 @@ fn run_track(a: &TrackArgs) -> Result<()> {
         &mut stream_rng(a.tracker.seed, 0),
     )
     .map_err(VizError::paper("epf"))?;
-    // After the run: an error is one stderr line and nothing else.
-    noise_note(&noise);
     if let Some(out) = &a.out {
         write_csv(
             out,
@@ -437,13 +439,15 @@ fn run_track(a: &TrackArgs) -> Result<()> {
         )?;
     }
     if a.tracker.json {
-        return print_json(&TrackJson {
+        print_json(&TrackJson {
             result: &result,
             q: noise.q,
             r: noise.r,
             q_source: source_key(noise.q_source),
             r_source: source_key(noise.r_source),
-        });
+        })?;
+        noise_note(&noise);
+        return Ok(());
     }
     print_line(format_args!(
         "{} ({}): {} targets over {} frames ({}..={})",
@@ -468,6 +472,7 @@ fn run_track(a: &TrackArgs) -> Result<()> {
             last[1]
         ))?;
     }
+    noise_note(&noise);
     Ok(())
 }
 
@@ -524,7 +529,6 @@ fn run_energies(a: &EnergiesArgs) -> Result<()> {
         },
         e => VizError::paper("epf")(e),
     })?;
-    noise_note(&noise);
     let [w1, w2, w3] = t.weighted;
     let [r1, r2, r3] = t.raw;
     let out = EnergiesJson {
@@ -543,7 +547,9 @@ fn run_energies(a: &EnergiesArgs) -> Result<()> {
         assignment: t.assignment,
     };
     if a.tracker.json {
-        return print_json(&out);
+        print_json(&out)?;
+        noise_note(&noise);
+        return Ok(());
     }
     print_line(format_args!(
         "frame {}: α_l·E^l and E(k, y_j) (rows: targets, columns: detection rows {:?})",
@@ -568,5 +574,6 @@ fn run_energies(a: &EnergiesArgs) -> Result<()> {
             .collect();
         print_line(format_args!("  T{id}: {}", cells.join("   ")))?;
     }
+    noise_note(&noise);
     Ok(())
 }
