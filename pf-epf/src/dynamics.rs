@@ -3,31 +3,40 @@
 //! associated observations each time one is associated.
 //!
 //! Step 2 fits "the cubic B-spline which control points are extracted from the available
-//! observations"; the paper gives no formula. Three end behaviours are kept, all from the
+//! observations"; the paper gives no formula. Four end behaviours are kept, all from the
 //! last three control points `(τ₋₂, P₋₂), (τ₋₁, P₋₁), (τ₀, P₀)` (frames and detections):
 //!
-//! - [`SplineOrder::CubicBSpline`] (the default, the paper's): the uniform cubic B-spline
-//!   whose control points are the detections. It approximates rather than interpolates: at
-//!   its last knot it passes through `x_end = (P₋₂ + 4P₋₁ + P₀)/6` with, per unit of the
-//!   spline parameter `u`, `x′ = (P₀ − P₋₂)/2` and `x″ = P₋₂ − 2P₋₁ + P₀`. Frame gaps are
-//!   handled by fitting the same spline to the frames, `τ(u)` with control values `τ_i`
-//!   (the B-spline of the space-time points `(τ_i, P_i)`), so the end lies at frame
+//! - The uniform cubic B-spline whose control points are the detections. It approximates
+//!   rather than interpolates: at its last knot it passes through
+//!   `x_end = (P₋₂ + 4P₋₁ + P₀)/6` with, per unit of the spline parameter `u`,
+//!   `x′ = (P₀ − P₋₂)/2` and `x″ = P₋₂ − 2P₋₁ + P₀`. Frame gaps are handled by fitting the
+//!   same spline to the frames, `τ(u)` with control values `τ_i` (the B-spline of the
+//!   space-time points `(τ_i, P_i)`), so the end lies at frame
 //!   `τ_end = (τ₋₂ + 4τ₋₁ + τ₀)/6` and, per frame,
 //!   `v = x′/τ′ = (P₀ − P₋₂)/(τ₀ − τ₋₂)`, `a = (x″ − v·τ″)/τ′²` with `τ′ = (τ₀ − τ₋₂)/2`,
 //!   `τ″ = τ₋₂ − 2τ₋₁ + τ₀`; on evenly spaced frames `h` apart, `v = (P₀ − P₋₂)/(2h)` and
-//!   `a = (P₋₂ − 2P₋₁ + P₀)/h²`. The model `x(t) = x_end + v·(t − τ_end) + ½a·(t − τ_end)²`
-//!   reproduces straight uniform motion exactly at any spacing.
+//!   `a = (P₋₂ − 2P₋₁ + P₀)/h²`. Two ways of using it are kept:
+//!   - [`SplineOrder::CubicBSplineEnd`] (the default for the particles and the gates): the
+//!     spline's end derivatives `v` and `a` are the re-estimated dynamic model, applied from
+//!     the last detection, `x(τ₀ + Δ) = x(τ₀) + v·Δ + ½a·Δ²`. On evenly spaced frames its
+//!     displacement over one gap is `v·h + ½a·h² = P₀ − P₋₁`, exactly the chord's, so it
+//!     carries the chord's detection noise (`2r²`); over other spans, and on uneven frames,
+//!     it differs.
+//!   - [`SplineOrder::CubicBSpline`] (the default for E²'s predictions): the spline's curve
+//!     continued past its end, `x(t) = x_end + v·(t − τ_end) + ½a·(t − τ_end)²`, whose
+//!     velocity at `t` is `v + a·(t − τ_end)`. Carried from `τ_end = τ₋₁` to `τ₀` on evenly
+//!     spaced frames, its `v` and `a` are the quadratic's end derivatives, so it
+//!     extrapolates the quadratic's displacement and carries its noise (`14r²` one step
+//!     ahead); it keeps the curvature E² compares.
 //! - [`SplineOrder::Quadratic`]: the end derivatives of the quadratic through the three
 //!   points, `a = 2·P[τ₀, τ₋₁, τ₋₂]`, `v = P[τ₀, τ₋₁] + P[τ₀, τ₋₁, τ₋₂]·(τ₀ − τ₋₁)`
 //!   (divided differences), exact for uniformly accelerated motion at any spacing.
 //! - [`SplineOrder::Linear`]: the chord, `a = 0`, `v = (P₀ − P₋₁)/(τ₀ − τ₋₁)`.
 //!
-//! With fewer than three points every order uses the chord. On evenly spaced frames the
-//! B-spline's `v` and `a`, carried from `τ_end = τ₋₁` to `τ₀`, are the quadratic's end
-//! derivatives, so the two extrapolate the same displacement (the B-spline's averaging moves
-//! its end point, not its derivatives at the last detection); they differ on uneven frames
-//! (the ants). [`SplineDynamics::displacement_noise_factor`] gives how much detection noise
-//! each extrapolation carries.
+//! With fewer than three points every order uses the chord. Both B-spline uses reproduce
+//! straight uniform motion exactly at any spacing.
+//! [`SplineDynamics::displacement_noise_factor`] gives how much detection noise each
+//! extrapolation carries.
 
 use crate::geometry::Vec2;
 use serde::{Deserialize, Serialize};
@@ -40,15 +49,19 @@ pub enum SplineOrder {
     Linear,
     /// Velocity and acceleration of the quadratic through the last three control points.
     Quadratic,
-    /// The uniform cubic B-spline whose control points are the detections (EPF step 2); the
-    /// default.
-    #[default]
+    /// The uniform cubic B-spline whose control points are the detections (EPF step 2),
+    /// continued past its end: the default for E²'s predictions.
     CubicBSpline,
+    /// The same B-spline's end derivatives as the dynamic model, applied from the last
+    /// detection (EPF step 2): the default for the particles and the gates.
+    #[default]
+    CubicBSplineEnd,
 }
 
 impl SplineOrder {
     /// Every order, the default first.
-    pub const ALL: [SplineOrder; 3] = [
+    pub const ALL: [SplineOrder; 4] = [
+        SplineOrder::CubicBSplineEnd,
         SplineOrder::CubicBSpline,
         SplineOrder::Linear,
         SplineOrder::Quadratic,
@@ -60,6 +73,7 @@ impl SplineOrder {
             SplineOrder::Linear => "linear",
             SplineOrder::Quadratic => "quadratic",
             SplineOrder::CubicBSpline => "cubic_b_spline",
+            SplineOrder::CubicBSplineEnd => "cubic_b_spline_end",
         }
     }
 }
@@ -86,7 +100,7 @@ pub struct SplineDynamics {
     /// `a`.
     a: Vec2,
     /// The frame `v` is the velocity at: the last control point's, or `τ_end` for the
-    /// B-spline.
+    /// B-spline's curve.
     t_ref: f64,
     /// Weights of `v` and `a` on the held control points (oldest first; zero beyond `len`).
     cv: [f64; 3],
@@ -160,14 +174,18 @@ impl SplineDynamics {
                     t2,
                 )
             }
-            (_, SplineOrder::CubicBSpline) => {
+            (_, order @ (SplineOrder::CubicBSpline | SplineOrder::CubicBSplineEnd)) => {
                 let [t0, t1, t2] = self.points.map(|p| p.0);
                 let tau_d1 = 0.5 * (t2 - t0);
                 let tau_d2 = t0 - 2.0 * t1 + t2;
                 let cv = [-1.0 / (t2 - t0), 0.0, 1.0 / (t2 - t0)];
                 let second = [1.0, -2.0, 1.0];
                 let ca = std::array::from_fn(|i| (second[i] - cv[i] * tau_d2) / (tau_d1 * tau_d1));
-                (cv, ca, (t0 + 4.0 * t1 + t2) / 6.0)
+                let t_ref = match order {
+                    SplineOrder::CubicBSpline => (t0 + 4.0 * t1 + t2) / 6.0,
+                    _ => t2,
+                };
+                (cv, ca, t_ref)
             }
         };
         self.cv = cv;
@@ -193,18 +211,18 @@ impl SplineDynamics {
         self.a
     }
 
-    /// The frame the model's `v` refers to: the last control point's, or the B-spline's end
-    /// `τ_end = (τ₋₂ + 4τ₋₁ + τ₀)/6` once it holds three.
+    /// The frame the model's `v` refers to: the last control point's, or, for the B-spline's
+    /// curve, its end `τ_end = (τ₋₂ + 4τ₋₁ + τ₀)/6` once it holds three.
     pub fn reference_frame(&self) -> f64 {
         self.t_ref
     }
 
-    /// The B-spline's end point `(P₋₂ + 4P₋₁ + P₀)/6` (with three control points and
-    /// [`SplineOrder::CubicBSpline`]); otherwise the last control point.
+    /// The B-spline's end point `(P₋₂ + 4P₋₁ + P₀)/6` (with three control points and either
+    /// B-spline order); otherwise the last control point.
     pub fn end_point(&self) -> Option<Vec2> {
         match (self.len, self.order) {
             (0, _) => None,
-            (3, SplineOrder::CubicBSpline) => {
+            (3, SplineOrder::CubicBSpline | SplineOrder::CubicBSplineEnd) => {
                 let p = self.points.map(|p| p.1);
                 Some((p[0] + p[1] * 4.0 + p[2]) / 6.0)
             }
@@ -224,7 +242,8 @@ impl SplineDynamics {
     /// `Σ_i c_i P_i` with `c_i = cv_i·Δ + ca_i·((t − t_ref)·Δ + ½Δ²)`, so independent
     /// detection noise of variance `r²` per coordinate gives `Var d = r² Σ_i c_i²`. Returns
     /// `Σ_i c_i²` (0 with fewer than two points). It widens the gate around `Â(t)`. At unit
-    /// spacing and `Δ = 1`: 2 for the chord, 14 for the quadratic and for the B-spline.
+    /// spacing and `Δ = 1`: 2 for the chord and the B-spline's end derivatives, 14 for the
+    /// quadratic and the B-spline's curve.
     pub fn displacement_noise_factor(&self, t: f64, dt: f64) -> f64 {
         let s = (t - self.t_ref) * dt + 0.5 * dt * dt;
         (0..self.len)
@@ -384,6 +403,48 @@ mod tests {
             "cubic_b_spline".parse::<SplineOrder>(),
             Ok(SplineOrder::CubicBSpline)
         );
-        assert_eq!(SplineOrder::default(), SplineOrder::CubicBSpline);
+        assert_eq!(SplineOrder::default(), SplineOrder::CubicBSplineEnd);
+    }
+
+    /// The B-spline's end derivatives applied from the last detection: the closed forms
+    /// `v = (P₀ − P₋₂)/(2h)`, `a = (P₋₂ − 2P₋₁ + P₀)/h²` at `τ₀`, a one-gap displacement equal
+    /// to the chord's `P₀ − P₋₁` (noise factor 2), a two-gap one of `2(P₀ − P₋₁) + a·h²`, and
+    /// straight motion kept exactly on uneven frames.
+    #[test]
+    fn cubic_b_spline_end_derivatives_give_the_chord_over_one_gap() {
+        let p = [
+            Vec2::new(1.0, -2.0),
+            Vec2::new(4.0, 0.5),
+            Vec2::new(6.5, 4.0),
+        ];
+        let h = 3.0;
+        let mut d = SplineDynamics::new(SplineOrder::CubicBSplineEnd);
+        for (t, x) in [4.0, 7.0, 10.0].into_iter().zip(p) {
+            d.push(t, x);
+        }
+        let (v, a) = (
+            (p[2] - p[0]) / (2.0 * h),
+            (p[0] - p[1] * 2.0 + p[2]) / (h * h),
+        );
+        assert_eq!(d.reference_frame(), 10.0);
+        assert!((d.velocity_at(10.0) - v).norm() < 1e-14);
+        assert!((d.acceleration() - a).norm() < 1e-14);
+        assert!((d.displacement(10.0, h) - (p[2] - p[1])).norm() < 1e-13);
+        assert!(
+            (d.displacement(10.0, 2.0 * h) - ((p[2] - p[1]) * 2.0 + a * (h * h))).norm() < 1e-13
+        );
+        assert!((d.displacement_noise_factor(10.0, h) - 2.0).abs() < 1e-12);
+        assert_eq!(
+            "cubic_b_spline_end".parse::<SplineOrder>(),
+            Ok(SplineOrder::CubicBSplineEnd)
+        );
+
+        let (x0, v0) = (Vec2::new(3.0, -1.0), Vec2::new(0.5, 2.0));
+        let mut s = SplineDynamics::new(SplineOrder::CubicBSplineEnd);
+        for t in [10.0, 25.0, 35.0] {
+            s.push(t, x0 + v0 * t);
+        }
+        assert!(s.acceleration().norm() < 1e-12);
+        assert!((x0 + v0 * 35.0 + s.displacement(35.0, 10.0) - (x0 + v0 * 45.0)).norm() < 1e-10);
     }
 }

@@ -77,16 +77,19 @@ pub struct TrackerConfig {
     pub r: f64,
     /// The choices left open in the energies.
     pub energy: EnergyConfig,
-    /// End behaviour of the B-spline dynamic model that moves the particles and centres
-    /// the gates (`Â(t)`): the chord by default, because the B-spline's (and the
-    /// quadratic's) extrapolation carries 7 times the chord's detection-noise variance one
-    /// step ahead and lost tracks (see the crate README).
+    /// End behaviour of the dynamic model that moves the particles and centres the gates
+    /// (`Â(t)`): by default the B-spline's end derivatives applied from the last detection
+    /// ([`SplineOrder::CubicBSplineEnd`], EPF step 2). The B-spline's curve continued past
+    /// its end, like the quadratic, carries 7 times the chord's detection-noise variance one
+    /// step ahead and loses tracks (see the crate README).
     pub spline: SplineOrder,
     /// End behaviour of the model behind E²'s predictions `Â₁(t+1)` and `Â₂(t+1)`. With
     /// [`SplineOrder::Linear`] the triangle `(Â(t−1), y_j, Â₂(t+1))` is always straight
     /// (`Â₂(t+1)` extends the chord through `y_j`), so E² would carry no information; the
-    /// cubic B-spline (the default, EPF step 2) and the quadratic give it the curvature the
-    /// paper's Fig. 1c–d compares.
+    /// cubic B-spline's curve (the default, EPF step 2) and the quadratic give it the
+    /// curvature the paper's Fig. 1c–d compares. The B-spline's end derivatives applied from
+    /// `y_j` give the chord's displacement on evenly spaced frames, and so a straight
+    /// triangle, too.
     pub energy_spline: SplineOrder,
     /// A target without a detection for more than this many tracked frames in a row is
     /// reported [`TrackStatus::Lost`] (up to it, [`TrackStatus::Coasting`]).
@@ -119,7 +122,7 @@ impl Default for TrackerConfig {
             q: 0.5,
             r: 0.5,
             energy: EnergyConfig::default(),
-            spline: SplineOrder::Linear,
+            spline: SplineOrder::CubicBSplineEnd,
             energy_spline: SplineOrder::CubicBSpline,
             lost_after: 3,
             reacquire: true,

@@ -30,14 +30,15 @@ pub struct SplineRow {
 }
 
 /// The dynamic-model configurations compared, `(spline, energy_spline)`: the default (the
-/// chord moves the particles, the B-spline shapes E²), the B-spline for both (the paper's
-/// one model), and the chord with E² from the quadratic. The quadratic for both is left
-/// out: on evenly spaced frames it extrapolates exactly as the B-spline does
-/// ([`crate::dynamics`]).
-pub const SPLINE_CONFIGS: [(SplineOrder, SplineOrder); 3] = [
+/// B-spline's end derivatives move the particles, its curve shapes E²), the chord moving the
+/// particles, the B-spline's curve for both, and the quadratic for both. On evenly spaced
+/// frames the first two move the particles alike and the last two extrapolate alike
+/// ([`crate::dynamics`]); they differ on uneven frames (the ants).
+pub const SPLINE_CONFIGS: [(SplineOrder, SplineOrder); 4] = [
+    (SplineOrder::CubicBSplineEnd, SplineOrder::CubicBSpline),
     (SplineOrder::Linear, SplineOrder::CubicBSpline),
     (SplineOrder::CubicBSpline, SplineOrder::CubicBSpline),
-    (SplineOrder::Linear, SplineOrder::Quadratic),
+    (SplineOrder::Quadratic, SplineOrder::Quadratic),
 ];
 
 /// EPF and NNSF under each of [`SPLINE_CONFIGS`] on the same `replications` simulations

@@ -649,15 +649,17 @@ fn spline_table(id: &str, scenes: &[(Scenario, &[SplineRow])], reps: usize) -> T
         id: id.to_owned(),
         caption: format!(
             "The dynamic model of EPF step 2, estimated from the last three associated \
-             detections: the uniform cubic B-spline on them (the paper's), the chord (linear) \
-             or the quadratic through them. \"particles\" moves the particles and centres the \
-             gates; \"E²\" gives E²'s predictions Â₁(t+1), Â₂(t+1). Association error rates \
-             and EPF's RMSE, mean ± standard error over the same {reps} simulations of each \
-             clean scene for every row. On evenly spaced frames the B-spline's velocity and \
-             acceleration, carried to the last detection, extrapolate exactly the quadratic's \
-             displacement (7 times the chord's detection-noise variance one step ahead), and \
-             the B-spline and the quadratic give E² the same predictions; they differ on \
-             uneven frames (the ants)."
+             detections: the uniform cubic B-spline on them (the paper's), through its end \
+             derivatives applied from the last detection (cubic_b_spline_end) or its curve \
+             continued past its end (cubic_b_spline), the chord (linear) or the quadratic \
+             through them. \"particles\" moves the particles and centres the gates; \"E²\" \
+             gives E²'s predictions Â₁(t+1), Â₂(t+1). Association error rates and EPF's RMSE, \
+             mean ± standard error over the same {reps} simulations of each clean scene for \
+             every row. Over one frame gap the B-spline's end derivatives move a target \
+             exactly as the chord does (P₀ − P₋₁); they differ after gaps in its control \
+             points. On evenly spaced frames the curve, carried to the last detection, \
+             extrapolates exactly the quadratic's displacement (7 times the chord's \
+             detection-noise variance one step ahead)."
         ),
         header: ["scene", "particles", "E²", "EPF", "NNSF", "EPF RMSE"]
             .iter()
@@ -943,10 +945,11 @@ fn notes(scenarios: &[ScenarioResult], report: &mut SectionReport) {
          3's adaptive rule), gate mass P_G = {}, detection noise r = the scenario's (0.15 or \
          0.3), process noise q = 0.3 (van–plane, walking men) or 1.0 per √frame (ants). E²'s \
          predictions Â₁(t+1), Â₂(t+1) come from the uniform cubic B-spline whose control \
-         points are the last three associated detections (EPF step 2); the particles move \
-         with the chord through the last two, because the B-spline's extrapolation from the \
-         last detection is the quadratic's on evenly spaced frames and raised the error \
-         rate on five of the six scenes (the dynamic-model tables). A circumcircle counts as a straight line above {}× its \
+         points are the last three associated detections (EPF step 2), continued past its \
+         end; the particles move with that spline's end derivatives from the last detection \
+         (over one frame gap, exactly the chord), because its curve's extrapolation is the \
+         quadratic's on evenly spaced frames and raised the error rate on five of the six \
+         scenes (the dynamic-model tables). A circumcircle counts as a straight line above {}× its \
          triangle's longest side (the radius-cap tables), and E³'s area is floored at {}× \
          the reference triangle's.",
         scenarios
