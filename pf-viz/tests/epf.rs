@@ -199,4 +199,54 @@ fn bad_input_gets_a_one_line_error() {
     fails_with(&out, &["--frame", "not a tracked frame"]);
     // A missing file.
     fails_with(&run(&s.path("nope.csv"), &init), &["nope.csv"]);
+    // An unknown dynamic model.
+    let out = pf_viz(&[
+        "epf", "track", "--data", &det, "--init", &init, "--spline", "cubic", "--json",
+    ]);
+    assert_ne!(out.status.code(), Some(0));
+    let err = one_line_error(&out, "epf", &["--spline", "cubic"]);
+    assert!(err.contains("cubic_b_spline_end"), "lists the names: {err}");
+}
+
+/// `--spline` and `--energy-spline` default to the library's `TrackerConfig` (the B-spline's
+/// end derivatives move the particles, its curve shapes E²), and each named alternative runs.
+#[test]
+fn spline_flags_default_to_the_library_and_accept_every_order() {
+    let s = Scratch::new("spline");
+    simulate(s.dir(), "crossing", &[]);
+    let track = |extra: &[&str]| {
+        let (data, init) = (s.path("detections.csv"), s.path("init.csv"));
+        let mut args = vec![
+            "epf",
+            "track",
+            "--data",
+            &data,
+            "--init",
+            &init,
+            "--particles",
+            "100",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        pf_viz_json(&args)
+    };
+    let default = track(&[]);
+    let d = pf_epf::tracker::TrackerConfig::default();
+    assert_eq!(
+        track(&[
+            "--spline",
+            d.spline.name(),
+            "--energy-spline",
+            d.energy_spline.name()
+        ]),
+        default
+    );
+    for order in ["cubic_b_spline", "linear", "quadratic"] {
+        let v = track(&["--spline", order]);
+        assert_eq!(v["tracks"].as_array().unwrap().len(), 2, "{order}");
+        // The curve and the quadratic widen the gates by their 14r² (the chord's 2r²).
+        if order != "linear" {
+            assert_ne!(v, default, "{order} moves the particles differently");
+        }
+    }
 }

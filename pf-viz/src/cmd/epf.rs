@@ -14,6 +14,7 @@ use pf_core::mc::stream_rng;
 use pf_epf::EpfError;
 use pf_epf::association::Association;
 use pf_epf::data::{Detection, Detections, Init, InitRow};
+use pf_epf::dynamics::SplineOrder;
 use pf_epf::geometry::Vec2;
 use pf_epf::scenario::{Scenario, ScenarioConfig, simulate};
 use pf_epf::tracker::{
@@ -87,6 +88,15 @@ pub struct TrackerArgs {
     /// Probability mass of the validation gates.
     #[arg(long, value_name = "P", default_value_t = TrackerConfig::default().gate_probability)]
     pub gate: f64,
+    /// The dynamic model that moves the particles and centres the gates (EPF step 2):
+    /// cubic_b_spline_end (the B-spline's end derivatives from the last detection, the
+    /// default), cubic_b_spline (its curve continued), linear (the chord) or quadratic.
+    #[arg(long, value_name = "ORDER", default_value = "cubic_b_spline_end")]
+    pub spline: SplineOrder,
+    /// The dynamic model behind E²'s predictions: cubic_b_spline (the default),
+    /// cubic_b_spline_end, linear or quadratic.
+    #[arg(long, value_name = "ORDER", default_value = "cubic_b_spline")]
+    pub energy_spline: SplineOrder,
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -269,6 +279,8 @@ impl TrackerArgs {
             association,
             n_particles: self.particles,
             gate_probability: self.gate,
+            spline: self.spline,
+            energy_spline: self.energy_spline,
             ..TrackerConfig::default()
         });
         (cfg, noise)
