@@ -24,6 +24,7 @@ use pf_core::gaussian::LN_2PI;
 use pf_core::geometry::wrap_angle;
 use pf_core::params::{ParamError, positive};
 use pf_core::simd::math::exp_nonpositive;
+use pf_core::simd::special::{exp, ln};
 
 /// Quadrature nodes, reused from one call to the next (no allocation once grown).
 #[derive(Debug, Clone, Default)]
@@ -74,29 +75,48 @@ impl<const D: usize> Nodes<D> {
         self.log_g.push(log_g);
     }
 
-    /// Fill [`Nodes::w`] with the normalised weights; returns `log Σ_j w_j`, the log of the
-    /// integral `∫ g^λ N dp`. `k`, `lambda` label the error.
+    /// Fill [`Nodes::w`] with the normalised weights `e^{log w_j − max} / Σ_i e^{log w_i − max}`;
+    /// returns `log Σ_j w_j`, the log of the integral `∫ g^λ N dp`. [`Nodes::log_w`] is left
+    /// as it was. `k`, `lambda` label the error.
+    ///
+    /// The maximum and the sum run over [`LANES`] interleaved partial results (the sum's
+    /// lanes added in order at the end), so that the loops vectorise instead of waiting on
+    /// one running value; `exp` is pf-core's [`exp_nonpositive`], as in
+    /// [`pf_core::weights::normalise`].
+    ///
+    /// # Errors
+    /// [`pf_core::CoreError::NonFiniteWeight`] for a NaN or `+∞` log-weight,
+    /// [`HomotopyError::DegenerateQuadrature`] without nodes or when every weight is zero.
     pub fn normalise(&mut self, k: usize, lambda: f64) -> Result<f64> {
         if self.is_empty() {
             return Err(HomotopyError::DegenerateQuadrature { k, lambda });
         }
         self.w.resize(self.log_w.len(), 0.0);
-        let mut lw = std::mem::take(&mut self.log_w);
-        let res = pf_core::weights::normalise(k, &mut lw, &mut self.w);
-        // `normalise` rewrote `lw` to normalised logs; restore the unnormalised values.
-        if let Ok(c) = res {
-            for l in lw.iter_mut() {
-                *l += c;
-            }
+        let (log_w, w) = (&self.log_w[..], &mut self.w[..]);
+        let (max, finite) = pf_core::simd::vectorised(
+            #[inline(always)]
+            || lane_max(log_w),
+        );
+        if !finite {
+            let (index, &value) = log_w
+                .iter()
+                .enumerate()
+                .find(|(_, l)| !(**l < f64::INFINITY))
+                .expect("a lane saw a NaN or +∞");
+            return Err(pf_core::CoreError::NonFiniteWeight { t: k, index, value }.into());
         }
-        self.log_w = lw;
-        match res {
-            Ok(c) => Ok(c),
-            Err(pf_core::CoreError::AllWeightsZero { .. }) => {
-                Err(HomotopyError::DegenerateQuadrature { k, lambda })
-            }
-            Err(e) => Err(e.into()),
+        if max == f64::NEG_INFINITY {
+            return Err(HomotopyError::DegenerateQuadrature { k, lambda });
         }
+        let sum = pf_core::simd::vectorised(
+            #[inline(always)]
+            || exp_lanes_sum(log_w, max, w),
+        );
+        let inv = 1.0 / sum;
+        for wi in w.iter_mut() {
+            *wi *= inv;
+        }
+        Ok(max + sum.ln())
     }
 
     /// `Σ_j w_j φ(p_j)` with the normalised weights.
@@ -107,6 +127,50 @@ impl<const D: usize> Nodes<D> {
             .map(|(p, w)| w * phi(p))
             .sum()
     }
+}
+
+/// Interleaved partial results of [`Nodes::normalise`]'s loops.
+const LANES: usize = 8;
+
+/// The largest of `l` and whether every value is below `+∞` (no NaN, no `+∞`), over
+/// [`LANES`] running maxima.
+#[inline(always)]
+fn lane_max(l: &[f64]) -> (f64, bool) {
+    let mut max = [f64::NEG_INFINITY; LANES];
+    let mut finite = [true; LANES];
+    let mut blocks = l.chunks_exact(LANES);
+    for b in &mut blocks {
+        for i in 0..LANES {
+            max[i] = max[i].max(b[i]);
+            finite[i] &= b[i] < f64::INFINITY;
+        }
+    }
+    for (i, &x) in blocks.remainder().iter().enumerate() {
+        max[i] = max[i].max(x);
+        finite[i] &= x < f64::INFINITY;
+    }
+    let m = max.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+    (m, finite.iter().all(|&f| f))
+}
+
+/// `w_i ← e^{l_i − max}` for every `i` (all `l_i ≤ max`), returning `Σ_i w_i` summed over
+/// [`LANES`] interleaved partial sums, added in lane order at the end.
+#[inline(always)]
+fn exp_lanes_sum(l: &[f64], max: f64, w: &mut [f64]) -> f64 {
+    let mut acc = [0.0f64; LANES];
+    let mut lb = l.chunks_exact(LANES);
+    let mut wb = w.chunks_exact_mut(LANES);
+    for (lc, wc) in (&mut lb).zip(&mut wb) {
+        for i in 0..LANES {
+            wc[i] = exp_nonpositive(lc[i] - max);
+            acc[i] += wc[i];
+        }
+    }
+    for (i, (&li, wi)) in lb.remainder().iter().zip(wb.into_remainder()).enumerate() {
+        *wi = exp_nonpositive(li - max);
+        acc[i] += *wi;
+    }
+    acc.iter().sum()
 }
 
 /// A rule for `∫ φ(p) g(y|p)^λ N(p; m, P) dp`; see the module docs.
@@ -293,6 +357,8 @@ struct PreGrid {
     log_g: Vec<f64>,
     /// Scratch: the placement density.
     q: Vec<f64>,
+    /// Scratch: the pre-grid's unit directions `u_β`.
+    dirs: Vec<Vector2<f64>>,
 }
 
 impl PolarGrid {
@@ -368,10 +434,9 @@ impl PolarGrid {
                     * (2.0 * std::f64::consts::PI).sqrt()
                     * 0.5
                     * erfc(-x / std::f64::consts::SQRT_2);
-            -0.5 * (dd - b * b / a) + i.max(f64::MIN_POSITIVE).ln()
+            -0.5 * (dd - b * b / a) + ln(i.max(f64::MIN_POSITIVE))
         };
         let h_pre = (hi0 - lo0) / n_pre as f64;
-        pre.log_mass.clear();
         pre.log_g.clear();
         // The directions of the pre-grid by rotation, one step of h_pre at a time: after
         // 2048 steps the rounding has moved them by about 10⁻¹³, far below what placing the
@@ -379,10 +444,24 @@ impl PolarGrid {
         let beta0 = centre + lo0 + 0.5 * h_pre;
         let (sh, ch) = h_pre.sin_cos();
         let (mut s_dir, mut c_dir) = beta0.sin_cos();
+        pre.dirs.clear();
         for _ in 0..n_pre {
-            pre.log_mass.push(log_ray_mass(Vector2::new(c_dir, s_dir)));
+            pre.dirs.push(Vector2::new(c_dir, s_dir));
             (c_dir, s_dir) = (c_dir * ch - s_dir * sh, s_dir * ch + c_dir * sh);
         }
+        // The masses in a loop of plain arithmetic (pf-core's `exp` and `ln`, this module's
+        // `erfc`), which LLVM vectorises.
+        pre.log_mass.clear();
+        pre.log_mass.resize(n_pre, 0.0);
+        let (dirs, log_mass) = (&pre.dirs[..], &mut pre.log_mass[..]);
+        pf_core::simd::vectorised(
+            #[inline(always)]
+            || {
+                for (m, &u) in log_mass.iter_mut().zip(dirs) {
+                    *m = log_ray_mass(u);
+                }
+            },
+        );
         *pre = PreGrid {
             key: Some((base.mean, base.cov)),
             lambda_mat,
@@ -395,6 +474,7 @@ impl PolarGrid {
             log_mass: std::mem::take(&mut pre.log_mass),
             log_g: std::mem::take(&mut pre.log_g),
             q: std::mem::take(&mut pre.q),
+            dirs: std::mem::take(&mut pre.dirs),
         };
         Ok(())
     }
@@ -463,37 +543,53 @@ impl TemperedQuadrature<2> for PolarGrid {
         let nb = cfg.n_bearing;
         let du = total / nb as f64;
         let (mut cell, mut acc) = (0usize, 0.0);
-        for ib in 0..nb {
-            let u_target = (ib as f64 + 0.5) * du;
-            while cell + 1 < n_pre && acc + q[cell] < u_target {
-                acc += q[cell];
-                cell += 1;
-            }
-            let frac = ((u_target - acc) / q[cell]).clamp(0.0, 1.0);
-            let beta = centre + lo0 + (cell as f64 + frac) * h_pre;
-            let db = du * h_pre / q[cell];
-            let u = Vector2::new(beta.cos(), beta.sin());
-            // Along the ray ρ + r u: (p − m)ᵀΛ(p − m) = a r² − 2 b r + dᵀΛd.
-            let lu = lambda_mat * u;
-            let a = u.dot(&lu);
-            let b = lu.dot(&d);
-            let r_star = b / a;
-            let s_r = a.sqrt().recip();
-            let r_lo = (r_star - c * s_r).max(0.0);
-            let r_hi = r_star + c * s_r;
-            if r_hi <= 0.0 {
-                continue;
-            }
-            let log_g = self.log_g_with(beta, ln_sigma);
-            let dr = (r_hi - r_lo) / cfg.n_range as f64;
-            for ir in 0..cfg.n_range {
-                let r = r_lo + (ir as f64 + 0.5) * dr;
-                let q = -0.5 * (a * r * r - 2.0 * b * r + dd);
-                let log_n = -LN_2PI - 0.5 * ln_det + q;
-                let lw = (r * dr * db).ln() + log_n + lambda * log_g;
-                nodes.push(rho + r * u, lw, log_g);
-            }
-        }
+        let q = &pre.q[..];
+        pf_core::simd::vectorised(
+            #[inline(always)]
+            || {
+                for ib in 0..nb {
+                    let u_target = (ib as f64 + 0.5) * du;
+                    while cell + 1 < n_pre && acc + q[cell] < u_target {
+                        acc += q[cell];
+                        cell += 1;
+                    }
+                    let frac = ((u_target - acc) / q[cell]).clamp(0.0, 1.0);
+                    let beta = centre + lo0 + (cell as f64 + frac) * h_pre;
+                    let db = du * h_pre / q[cell];
+                    let u = Vector2::new(beta.cos(), beta.sin());
+                    // Along the ray ρ + r u: (p − m)ᵀΛ(p − m) = a r² − 2 b r + dᵀΛd.
+                    let lu = lambda_mat * u;
+                    let a = u.dot(&lu);
+                    let b = lu.dot(&d);
+                    let r_star = b / a;
+                    let s_r = a.sqrt().recip();
+                    let r_lo = (r_star - c * s_r).max(0.0);
+                    let r_hi = r_star + c * s_r;
+                    if r_hi <= 0.0 {
+                        continue;
+                    }
+                    let log_g = self.log_g_with(beta, ln_sigma);
+                    let dr = (r_hi - r_lo) / cfg.n_range as f64;
+                    // The ray's nodes in one loop of plain arithmetic (pf-core's `ln`), which LLVM
+                    // vectorises.
+                    let start = nodes.len();
+                    let end = start + cfg.n_range;
+                    nodes.points.resize(end, SVector::zeros());
+                    nodes.log_w.resize(end, 0.0);
+                    nodes.log_g.resize(end, log_g);
+                    let ray = nodes.points[start..]
+                        .iter_mut()
+                        .zip(&mut nodes.log_w[start..]);
+                    for (ir, (p, lw)) in ray.enumerate() {
+                        let r = r_lo + (ir as f64 + 0.5) * dr;
+                        let q = -0.5 * (a * r * r - 2.0 * b * r + dd);
+                        let log_n = -LN_2PI - 0.5 * ln_det + q;
+                        *lw = ln(r * dr * db) + log_n + lambda * log_g;
+                        *p = rho + r * u;
+                    }
+                }
+            },
+        );
         Ok(())
     }
 }
@@ -598,6 +694,10 @@ pub fn log_density<const D: usize>(g: &Gaussian<D>, p: &SVector<f64, D>) -> f64 
 /// 1.2·10⁻⁷ everywhere (Chebyshev fit of W. H. Press et al., *Numerical Recipes*, 2nd ed.,
 /// §6.2, `erfcc`). Used only to place the bearing grid, where this accuracy is ample; no
 /// workspace dependency provides it.
+///
+/// Plain arithmetic and pf-core's branch-free [`exp`] (within 1 ulp of glibc's), so that a
+/// loop over it vectorises.
+#[inline(always)]
 pub fn erfc(x: f64) -> f64 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
@@ -609,7 +709,7 @@ pub fn erfc(x: f64) -> f64 {
                         + t * (0.278_868_07
                             + t * (-1.135_203_98
                                 + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    let r = t * poly.exp();
+    let r = t * exp(poly);
     if x >= 0.0 { r } else { 2.0 - r }
 }
 
