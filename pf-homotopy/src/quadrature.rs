@@ -326,6 +326,31 @@ fn bearing_extent(
     Some((bc, lo - pad, hi + pad))
 }
 
+/// The log of the ray mass along the unit direction `u` from the observer,
+/// `log ∫_0^∞ r N(ρ + r u) dr` up to a constant, for the Gaussian with precision `Λ` and
+/// `d = m − ρ`, `dd = dᵀΛd`: along the ray `(p − m)ᵀΛ(p − m) = a r² − 2 b r + dᵀΛd`.
+#[inline(always)]
+fn log_ray_mass(
+    lambda_mat: &SMatrix<f64, 2, 2>,
+    d: &Vector2<f64>,
+    dd: f64,
+    u: Vector2<f64>,
+) -> f64 {
+    let lu = lambda_mat * u;
+    let a = u.dot(&lu);
+    let b = lu.dot(d);
+    let (r_star, s_r) = (b / a, a.sqrt().recip());
+    // ∫_0^∞ r exp(−(r − r*)²/2s²) dr = s² e^{−x²/2} + r* s √(2π) Φ(x), x = r*/s.
+    let x = r_star / s_r;
+    let i = s_r * s_r * exp_nonpositive(-0.5 * x * x)
+        + r_star
+            * s_r
+            * (2.0 * std::f64::consts::PI).sqrt()
+            * 0.5
+            * erfc(-x / std::f64::consts::SQRT_2);
+    -0.5 * (dd - b * b / a) + ln(i.max(f64::MIN_POSITIVE))
+}
+
 /// The diamond angle of `(x, y)`: `t = y/(|x| + |y|)` for `x ≥ 0`, `±2 − t` for `x < 0`
 /// (the sign of `y`), in `[−2, 2]`, increasing with `atan2(y, x)` over `(−π, π]`, with
 /// derivative `1/(|cos| + |sin|)² ≥ ½` in the angle.
@@ -420,22 +445,6 @@ impl PolarGrid {
             ),
         };
         let dd = d.dot(&(lambda_mat * d));
-        // The log of the ray mass along the unit direction u.
-        let log_ray_mass = |u: Vector2<f64>| -> f64 {
-            let lu = lambda_mat * u;
-            let a = u.dot(&lu);
-            let b = lu.dot(&d);
-            let (r_star, s_r) = (b / a, a.sqrt().recip());
-            // ∫_0^∞ r exp(−(r − r*)²/2s²) dr = s² e^{−x²/2} + r* s √(2π) Φ(x), x = r*/s.
-            let x = r_star / s_r;
-            let i = s_r * s_r * exp_nonpositive(-0.5 * x * x)
-                + r_star
-                    * s_r
-                    * (2.0 * std::f64::consts::PI).sqrt()
-                    * 0.5
-                    * erfc(-x / std::f64::consts::SQRT_2);
-            -0.5 * (dd - b * b / a) + ln(i.max(f64::MIN_POSITIVE))
-        };
         let h_pre = (hi0 - lo0) / n_pre as f64;
         pre.log_g.clear();
         // The directions of the pre-grid by rotation, one step of h_pre at a time: after
@@ -458,7 +467,7 @@ impl PolarGrid {
             #[inline(always)]
             || {
                 for (m, &u) in log_mass.iter_mut().zip(dirs) {
-                    *m = log_ray_mass(u);
+                    *m = log_ray_mass(&lambda_mat, &d, dd, u);
                 }
             },
         );
