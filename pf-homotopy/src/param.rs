@@ -163,11 +163,11 @@ impl<const D: usize, const L: usize> LaneMoments<D, L> {
     #[inline(always)]
     fn add(&mut self, l: usize, u: &[f64; D], w: f64) {
         self.m0[l] += w;
-        for r in 0..D {
-            let wu = u[r] * w;
+        for (r, &ur) in u.iter().enumerate() {
+            let wu = ur * w;
             self.m1[r][l] += wu;
-            for c in 0..D {
-                self.m2[r][c][l] += wu * u[c];
+            for (m2, &uc) in self.m2[r].iter_mut().zip(u) {
+                m2[l] += wu * uc;
             }
         }
     }

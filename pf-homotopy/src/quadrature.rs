@@ -79,7 +79,7 @@ impl<const D: usize> Nodes<D> {
     /// returns `log Σ_j w_j`, the log of the integral `∫ g^λ N dp`. [`Nodes::log_w`] is left
     /// as it was. `k`, `lambda` label the error.
     ///
-    /// The maximum and the sum run over [`LANES`] interleaved partial results (the sum's
+    /// The maximum and the sum run over eight interleaved partial results (the sum's
     /// lanes added in order at the end), so that the loops vectorise instead of waiting on
     /// one running value; `exp` is pf-core's [`exp_nonpositive`], as in
     /// [`pf_core::weights::normalise`].
@@ -101,7 +101,7 @@ impl<const D: usize> Nodes<D> {
             let (index, &value) = log_w
                 .iter()
                 .enumerate()
-                .find(|(_, l)| !(**l < f64::INFINITY))
+                .find(|(_, l)| l.is_nan() || **l == f64::INFINITY)
                 .expect("a lane saw a NaN or +∞");
             return Err(pf_core::CoreError::NonFiniteWeight { t: k, index, value }.into());
         }
