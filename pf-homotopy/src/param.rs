@@ -387,6 +387,37 @@ mod tests {
         Gaussian::new(Vector2::new(1.0, -2.0), Matrix2::new(2.0, 0.6, 0.6, 1.5))
     }
 
+    /// The lane sums of `moments_pair` are `Moments::add` over every point, to rounding,
+    /// for every remainder of the lane count.
+    #[test]
+    fn lane_moments_are_the_running_moments() {
+        let d = Derivatives::new(&g()).unwrap();
+        for n in [1usize, 3, 4, 5, 1151, 1152] {
+            let pts: Vec<SVector<f64, 2>> = (0..n)
+                .map(|j| {
+                    let t = j as f64 * 0.37;
+                    Vector2::new(1.0 + 3.0 * t.sin(), -2.0 + 2.0 * (1.3 * t).cos())
+                })
+                .collect();
+            let a: Vec<f64> = (0..n).map(|j| ((j % 7) as f64 - 3.0) * 1e-3).collect();
+            let b: Vec<f64> = (0..n).map(|j| 1.0 / (1.0 + j as f64)).collect();
+            let (la, lb) = d.moments_pair(&pts, &a, &b);
+            let (mut ra, mut rb) = (Moments::default(), Moments::default());
+            for ((p, &wa), &wb) in pts.iter().zip(&a).zip(&b) {
+                let u = d.whiten(p);
+                ra.add(&u, wa);
+                rb.add(&u, wb);
+            }
+            for (lane, run) in [(la, ra), (lb, rb)] {
+                let scale = 1.0 + run.m0.abs() + run.m1.abs().sum() + run.m2.abs().sum();
+                let err = (lane.m0 - run.m0).abs()
+                    + (lane.m1 - run.m1).abs().sum()
+                    + (lane.m2 - run.m2).abs().sum();
+                assert!(err <= 1e-13 * scale, "n = {n}: {lane:?} against {run:?}");
+            }
+        }
+    }
+
     fn log_f(th: &DVector<f64>, p: &Vector2<f64>) -> f64 {
         let g = Gaussian::<2>::from_theta(th);
         let l = g.cov.try_inverse().unwrap();

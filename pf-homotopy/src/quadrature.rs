@@ -751,6 +751,53 @@ mod tests {
         Some((bc, lo - pad, hi + pad))
     }
 
+    /// The normalised weights and the log normaliser are pf-core's `normalise`'s to a few
+    /// ulp, the log-weights are left as given, and a NaN, a `+∞` or no positive weight is
+    /// an error.
+    #[test]
+    fn nodes_normalise_as_pf_core_does() {
+        for n in [1usize, 7, 8, 9, 1152] {
+            let mut nodes = Nodes::<2>::new();
+            for j in 0..n {
+                let lw =
+                    -0.5 * (j as f64 * 0.01 - 3.0).powi(2) + if j % 5 == 0 { -800.0 } else { 0.0 };
+                nodes.push(SVector::zeros(), lw, 0.0);
+            }
+            let given = nodes.log_w.clone();
+            let c = nodes.normalise(0, 1.0).unwrap();
+            let (mut l, mut w) = (given.clone(), vec![0.0; n]);
+            let c_ref = pf_core::weights::normalise(0, &mut l, &mut w).unwrap();
+            assert!((c - c_ref).abs() <= 1e-14 * c_ref.abs().max(1.0), "n = {n}");
+            for (a, b) in nodes.w.iter().zip(&w) {
+                assert!(
+                    (a - b).abs() <= 4.0 * f64::EPSILON * b,
+                    "n = {n}: {a} against {b}"
+                );
+            }
+            assert_eq!(nodes.log_w, given);
+        }
+        for bad in [f64::NAN, f64::INFINITY] {
+            let mut nodes = Nodes::<2>::new();
+            for j in 0..11 {
+                nodes.push(SVector::zeros(), if j == 9 { bad } else { 0.0 }, 0.0);
+            }
+            assert!(matches!(
+                nodes.normalise(3, 0.5),
+                Err(HomotopyError::Core(pf_core::CoreError::NonFiniteWeight {
+                    t: 3,
+                    index: 9,
+                    ..
+                }))
+            ));
+        }
+        let mut nodes = Nodes::<2>::new();
+        nodes.push(SVector::zeros(), f64::NEG_INFINITY, 0.0);
+        assert!(matches!(
+            nodes.normalise(2, 0.5),
+            Err(HomotopyError::DegenerateQuadrature { k: 2, .. })
+        ));
+    }
+
     /// The diamond angle increases with the angle over the whole circle.
     #[test]
     fn the_diamond_angle_increases_with_the_angle() {

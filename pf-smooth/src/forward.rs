@@ -513,6 +513,37 @@ mod tests {
         assert_eq!(fs.estimate().unwrap(), [0.25 * 1.5 + 0.75 * 0.5]);
     }
 
+    /// The backward weights are pf-core's normalised weights to a few ulp, at every
+    /// remainder of the lane count; NaN, `+∞` and no positive weight fail as there.
+    #[test]
+    fn lane_normalisation_is_pf_cores() {
+        for n in [1usize, 7, 8, 9, 100, 1000] {
+            let l: Vec<f64> = (0..n)
+                .map(|j| {
+                    let e = j as f64 * 0.05 - 2.0;
+                    if j % 6 == 1 { -1e3 } else { -0.5 * e * e }
+                })
+                .collect();
+            let mut beta = vec![0.0; n];
+            assert!(normalise_lanes(&l, &mut beta));
+            let (mut lr, mut wr) = (l.clone(), vec![0.0; n]);
+            pf_core::weights::normalise(0, &mut lr, &mut wr).unwrap();
+            for (a, b) in beta.iter().zip(&wr) {
+                assert!(
+                    (a - b).abs() <= 4.0 * f64::EPSILON * b,
+                    "n = {n}: {a} against {b}"
+                );
+            }
+        }
+        let mut beta = [0.0; 10];
+        for bad in [f64::NAN, f64::INFINITY] {
+            let mut l = [0.0; 10];
+            l[9] = bad;
+            assert!(!normalise_lanes(&l, &mut beta));
+        }
+        assert!(!normalise_lanes(&[f64::NEG_INFINITY; 10], &mut beta));
+    }
+
     #[test]
     fn no_estimate_before_the_first_step() {
         let data = Ar1Data::new(vec![0.1, 0.2, 0.3]).unwrap();
