@@ -23,7 +23,7 @@ use crate::param::{Gaussian, log_normal};
 use pf_core::gaussian::LN_2PI;
 use pf_core::geometry::wrap_angle;
 use pf_core::params::{ParamError, positive};
-use pf_core::simd::math::exp_nonpositive;
+use pf_core::simd::math::{exp_nonpositive, exp_nonpositive_lanes};
 use pf_core::simd::special::{exp, ln};
 
 /// Quadrature nodes, reused from one call to the next (no allocation once grown).
@@ -160,15 +160,24 @@ fn exp_lanes_sum(l: &[f64], max: f64, w: &mut [f64]) -> f64 {
     let mut acc = [0.0f64; LANES];
     let mut lb = l.chunks_exact(LANES);
     let mut wb = w.chunks_exact_mut(LANES);
+    // `exp` a block of lanes at a time, each step over every lane before the next (one
+    // lane at a time, its table look-up kept the loop scalar); the same bits per value.
     for (lc, wc) in (&mut lb).zip(&mut wb) {
+        let e = exp_nonpositive_lanes::<LANES>(std::array::from_fn(|i| lc[i] - max));
         for i in 0..LANES {
-            wc[i] = exp_nonpositive(lc[i] - max);
-            acc[i] += wc[i];
+            wc[i] = e[i];
+            acc[i] += e[i];
         }
     }
-    for (i, (&li, wi)) in lb.remainder().iter().zip(wb.into_remainder()).enumerate() {
-        *wi = exp_nonpositive(li - max);
-        acc[i] += *wi;
+    let (lr, wr) = (lb.remainder(), wb.into_remainder());
+    let mut x = [f64::NEG_INFINITY; LANES];
+    for (xi, &li) in x.iter_mut().zip(lr) {
+        *xi = li - max;
+    }
+    let e = exp_nonpositive_lanes(x);
+    for (i, wi) in wr.iter_mut().enumerate() {
+        *wi = e[i];
+        acc[i] += e[i];
     }
     acc.iter().sum()
 }
