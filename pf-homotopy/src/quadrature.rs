@@ -164,9 +164,9 @@ fn exp_lanes_sum(l: &[f64], max: f64, w: &mut [f64]) -> f64 {
     // lane at a time, its table look-up kept the loop scalar); the same bits per value.
     for (lc, wc) in (&mut lb).zip(&mut wb) {
         let e = exp_nonpositive_lanes::<LANES>(std::array::from_fn(|i| lc[i] - max));
-        for i in 0..LANES {
-            wc[i] = e[i];
-            acc[i] += e[i];
+        wc.copy_from_slice(&e);
+        for (a, y) in acc.iter_mut().zip(e) {
+            *a += y;
         }
     }
     let (lr, wr) = (lb.remainder(), wb.into_remainder());
