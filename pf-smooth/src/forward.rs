@@ -197,7 +197,7 @@ const LANES: usize = 8;
 /// or `+∞`, or every one is `−∞`: the cases where that function fails.
 #[inline(always)]
 fn normalise_lanes(l: &[f64], beta: &mut [f64]) -> bool {
-    use pf_core::simd::math::exp_nonpositive;
+    use pf_core::simd::math::exp_nonpositive_lanes;
     let mut max = [f64::NEG_INFINITY; LANES];
     let mut finite = [true; LANES];
     let mut blocks = l.chunks_exact(LANES);
@@ -218,15 +218,24 @@ fn normalise_lanes(l: &[f64], beta: &mut [f64]) -> bool {
     let mut acc = [0.0f64; LANES];
     let mut lb = l.chunks_exact(LANES);
     let mut wb = beta.chunks_exact_mut(LANES);
+    // `exp` a block of lanes at a time, each step over every lane before the next (one
+    // lane at a time, its table look-up kept the loop scalar); the same bits per value.
     for (lc, wc) in (&mut lb).zip(&mut wb) {
-        for i in 0..LANES {
-            wc[i] = exp_nonpositive(lc[i] - max);
-            acc[i] += wc[i];
+        let e = exp_nonpositive_lanes::<LANES>(std::array::from_fn(|i| lc[i] - max));
+        wc.copy_from_slice(&e);
+        for (a, y) in acc.iter_mut().zip(e) {
+            *a += y;
         }
     }
-    for (i, (&li, wi)) in lb.remainder().iter().zip(wb.into_remainder()).enumerate() {
-        *wi = exp_nonpositive(li - max);
-        acc[i] += *wi;
+    let (lr, wr) = (lb.remainder(), wb.into_remainder());
+    let mut x = [f64::NEG_INFINITY; LANES];
+    for (xi, &li) in x.iter_mut().zip(lr) {
+        *xi = li - max;
+    }
+    let e = exp_nonpositive_lanes(x);
+    for (i, wi) in wr.iter_mut().enumerate() {
+        *wi = e[i];
+        acc[i] += e[i];
     }
     let inv = 1.0 / acc.iter().sum::<f64>();
     for b in beta.iter_mut() {
