@@ -23,7 +23,8 @@ use crate::param::{Gaussian, log_normal};
 use pf_core::gaussian::LN_2PI;
 use pf_core::geometry::wrap_angle;
 use pf_core::params::{ParamError, positive};
-use pf_core::simd::math::exp_nonpositive;
+use pf_core::simd::math::{exp_nonpositive, exp_nonpositive_lanes};
+use pf_core::simd::special::{exp, ln};
 
 /// Quadrature nodes, reused from one call to the next (no allocation once grown).
 #[derive(Debug, Clone, Default)]
@@ -74,29 +75,48 @@ impl<const D: usize> Nodes<D> {
         self.log_g.push(log_g);
     }
 
-    /// Fill [`Nodes::w`] with the normalised weights; returns `log Σ_j w_j`, the log of the
-    /// integral `∫ g^λ N dp`. `k`, `lambda` label the error.
+    /// Fill [`Nodes::w`] with the normalised weights `e^{log w_j − max} / Σ_i e^{log w_i − max}`;
+    /// returns `log Σ_j w_j`, the log of the integral `∫ g^λ N dp`. [`Nodes::log_w`] is left
+    /// as it was. `k`, `lambda` label the error.
+    ///
+    /// The maximum and the sum run over eight interleaved partial results (the sum's
+    /// lanes added in order at the end), so that the loops vectorise instead of waiting on
+    /// one running value; `exp` is pf-core's [`exp_nonpositive`], as in
+    /// [`pf_core::weights::normalise`].
+    ///
+    /// # Errors
+    /// [`pf_core::CoreError::NonFiniteWeight`] for a NaN or `+∞` log-weight,
+    /// [`HomotopyError::DegenerateQuadrature`] without nodes or when every weight is zero.
     pub fn normalise(&mut self, k: usize, lambda: f64) -> Result<f64> {
         if self.is_empty() {
             return Err(HomotopyError::DegenerateQuadrature { k, lambda });
         }
         self.w.resize(self.log_w.len(), 0.0);
-        let mut lw = std::mem::take(&mut self.log_w);
-        let res = pf_core::weights::normalise(k, &mut lw, &mut self.w);
-        // `normalise` rewrote `lw` to normalised logs; restore the unnormalised values.
-        if let Ok(c) = res {
-            for l in lw.iter_mut() {
-                *l += c;
-            }
+        let (log_w, w) = (&self.log_w[..], &mut self.w[..]);
+        let (max, finite) = pf_core::simd::vectorised(
+            #[inline(always)]
+            || lane_max(log_w),
+        );
+        if !finite {
+            let (index, &value) = log_w
+                .iter()
+                .enumerate()
+                .find(|(_, l)| l.is_nan() || **l == f64::INFINITY)
+                .expect("a lane saw a NaN or +∞");
+            return Err(pf_core::CoreError::NonFiniteWeight { t: k, index, value }.into());
         }
-        self.log_w = lw;
-        match res {
-            Ok(c) => Ok(c),
-            Err(pf_core::CoreError::AllWeightsZero { .. }) => {
-                Err(HomotopyError::DegenerateQuadrature { k, lambda })
-            }
-            Err(e) => Err(e.into()),
+        if max == f64::NEG_INFINITY {
+            return Err(HomotopyError::DegenerateQuadrature { k, lambda });
         }
+        let sum = pf_core::simd::vectorised(
+            #[inline(always)]
+            || exp_lanes_sum(log_w, max, w),
+        );
+        let inv = 1.0 / sum;
+        for wi in w.iter_mut() {
+            *wi *= inv;
+        }
+        Ok(max + sum.ln())
     }
 
     /// `Σ_j w_j φ(p_j)` with the normalised weights.
@@ -107,6 +127,59 @@ impl<const D: usize> Nodes<D> {
             .map(|(p, w)| w * phi(p))
             .sum()
     }
+}
+
+/// Interleaved partial results of [`Nodes::normalise`]'s loops.
+const LANES: usize = 8;
+
+/// The largest of `l` and whether every value is below `+∞` (no NaN, no `+∞`), over
+/// [`LANES`] running maxima.
+#[inline(always)]
+fn lane_max(l: &[f64]) -> (f64, bool) {
+    let mut max = [f64::NEG_INFINITY; LANES];
+    let mut finite = [true; LANES];
+    let mut blocks = l.chunks_exact(LANES);
+    for b in &mut blocks {
+        for i in 0..LANES {
+            max[i] = max[i].max(b[i]);
+            finite[i] &= b[i] < f64::INFINITY;
+        }
+    }
+    for (i, &x) in blocks.remainder().iter().enumerate() {
+        max[i] = max[i].max(x);
+        finite[i] &= x < f64::INFINITY;
+    }
+    let m = max.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+    (m, finite.iter().all(|&f| f))
+}
+
+/// `w_i ← e^{l_i − max}` for every `i` (all `l_i ≤ max`), returning `Σ_i w_i` summed over
+/// [`LANES`] interleaved partial sums, added in lane order at the end.
+#[inline(always)]
+fn exp_lanes_sum(l: &[f64], max: f64, w: &mut [f64]) -> f64 {
+    let mut acc = [0.0f64; LANES];
+    let mut lb = l.chunks_exact(LANES);
+    let mut wb = w.chunks_exact_mut(LANES);
+    // `exp` a block of lanes at a time, each step over every lane before the next (one
+    // lane at a time, its table look-up kept the loop scalar); the same bits per value.
+    for (lc, wc) in (&mut lb).zip(&mut wb) {
+        let e = exp_nonpositive_lanes::<LANES>(std::array::from_fn(|i| lc[i] - max));
+        wc.copy_from_slice(&e);
+        for (a, y) in acc.iter_mut().zip(e) {
+            *a += y;
+        }
+    }
+    let (lr, wr) = (lb.remainder(), wb.into_remainder());
+    let mut x = [f64::NEG_INFINITY; LANES];
+    for (xi, &li) in x.iter_mut().zip(lr) {
+        *xi = li - max;
+    }
+    let e = exp_nonpositive_lanes(x);
+    for (i, wi) in wr.iter_mut().enumerate() {
+        *wi = e[i];
+        acc[i] += e[i];
+    }
+    acc.iter().sum()
 }
 
 /// A rule for `∫ φ(p) g(y|p)^λ N(p; m, P) dp`; see the module docs.
@@ -262,6 +335,31 @@ fn bearing_extent(
     Some((bc, lo - pad, hi + pad))
 }
 
+/// The log of the ray mass along the unit direction `u` from the observer,
+/// `log ∫_0^∞ r N(ρ + r u) dr` up to a constant, for the Gaussian with precision `Λ` and
+/// `d = m − ρ`, `dd = dᵀΛd`: along the ray `(p − m)ᵀΛ(p − m) = a r² − 2 b r + dᵀΛd`.
+#[inline(always)]
+fn log_ray_mass(
+    lambda_mat: &SMatrix<f64, 2, 2>,
+    d: &Vector2<f64>,
+    dd: f64,
+    u: Vector2<f64>,
+) -> f64 {
+    let lu = lambda_mat * u;
+    let a = u.dot(&lu);
+    let b = lu.dot(d);
+    let (r_star, s_r) = (b / a, a.sqrt().recip());
+    // ∫_0^∞ r exp(−(r − r*)²/2s²) dr = s² e^{−x²/2} + r* s √(2π) Φ(x), x = r*/s.
+    let x = r_star / s_r;
+    let i = s_r * s_r * exp_nonpositive(-0.5 * x * x)
+        + r_star
+            * s_r
+            * (2.0 * std::f64::consts::PI).sqrt()
+            * 0.5
+            * erfc(-x / std::f64::consts::SQRT_2);
+    -0.5 * (dd - b * b / a) + ln(i.max(f64::MIN_POSITIVE))
+}
+
 /// The diamond angle of `(x, y)`: `t = y/(|x| + |y|)` for `x ≥ 0`, `±2 − t` for `x < 0`
 /// (the sign of `y`), in `[−2, 2]`, increasing with `atan2(y, x)` over `(−π, π]`, with
 /// derivative `1/(|cos| + |sin|)² ≥ ½` in the angle.
@@ -293,6 +391,8 @@ struct PreGrid {
     log_g: Vec<f64>,
     /// Scratch: the placement density.
     q: Vec<f64>,
+    /// Scratch: the pre-grid's unit directions `u_β`.
+    dirs: Vec<Vector2<f64>>,
 }
 
 impl PolarGrid {
@@ -354,24 +454,7 @@ impl PolarGrid {
             ),
         };
         let dd = d.dot(&(lambda_mat * d));
-        // The log of the ray mass along the unit direction u.
-        let log_ray_mass = |u: Vector2<f64>| -> f64 {
-            let lu = lambda_mat * u;
-            let a = u.dot(&lu);
-            let b = lu.dot(&d);
-            let (r_star, s_r) = (b / a, a.sqrt().recip());
-            // ∫_0^∞ r exp(−(r − r*)²/2s²) dr = s² e^{−x²/2} + r* s √(2π) Φ(x), x = r*/s.
-            let x = r_star / s_r;
-            let i = s_r * s_r * exp_nonpositive(-0.5 * x * x)
-                + r_star
-                    * s_r
-                    * (2.0 * std::f64::consts::PI).sqrt()
-                    * 0.5
-                    * erfc(-x / std::f64::consts::SQRT_2);
-            -0.5 * (dd - b * b / a) + i.max(f64::MIN_POSITIVE).ln()
-        };
         let h_pre = (hi0 - lo0) / n_pre as f64;
-        pre.log_mass.clear();
         pre.log_g.clear();
         // The directions of the pre-grid by rotation, one step of h_pre at a time: after
         // 2048 steps the rounding has moved them by about 10⁻¹³, far below what placing the
@@ -379,10 +462,24 @@ impl PolarGrid {
         let beta0 = centre + lo0 + 0.5 * h_pre;
         let (sh, ch) = h_pre.sin_cos();
         let (mut s_dir, mut c_dir) = beta0.sin_cos();
+        pre.dirs.clear();
         for _ in 0..n_pre {
-            pre.log_mass.push(log_ray_mass(Vector2::new(c_dir, s_dir)));
+            pre.dirs.push(Vector2::new(c_dir, s_dir));
             (c_dir, s_dir) = (c_dir * ch - s_dir * sh, s_dir * ch + c_dir * sh);
         }
+        // The masses in a loop of plain arithmetic (pf-core's `exp` and `ln`, this module's
+        // `erfc`), which LLVM vectorises.
+        pre.log_mass.clear();
+        pre.log_mass.resize(n_pre, 0.0);
+        let (dirs, log_mass) = (&pre.dirs[..], &mut pre.log_mass[..]);
+        pf_core::simd::vectorised(
+            #[inline(always)]
+            || {
+                for (m, &u) in log_mass.iter_mut().zip(dirs) {
+                    *m = log_ray_mass(&lambda_mat, &d, dd, u);
+                }
+            },
+        );
         *pre = PreGrid {
             key: Some((base.mean, base.cov)),
             lambda_mat,
@@ -395,6 +492,7 @@ impl PolarGrid {
             log_mass: std::mem::take(&mut pre.log_mass),
             log_g: std::mem::take(&mut pre.log_g),
             q: std::mem::take(&mut pre.q),
+            dirs: std::mem::take(&mut pre.dirs),
         };
         Ok(())
     }
@@ -463,37 +561,53 @@ impl TemperedQuadrature<2> for PolarGrid {
         let nb = cfg.n_bearing;
         let du = total / nb as f64;
         let (mut cell, mut acc) = (0usize, 0.0);
-        for ib in 0..nb {
-            let u_target = (ib as f64 + 0.5) * du;
-            while cell + 1 < n_pre && acc + q[cell] < u_target {
-                acc += q[cell];
-                cell += 1;
-            }
-            let frac = ((u_target - acc) / q[cell]).clamp(0.0, 1.0);
-            let beta = centre + lo0 + (cell as f64 + frac) * h_pre;
-            let db = du * h_pre / q[cell];
-            let u = Vector2::new(beta.cos(), beta.sin());
-            // Along the ray ρ + r u: (p − m)ᵀΛ(p − m) = a r² − 2 b r + dᵀΛd.
-            let lu = lambda_mat * u;
-            let a = u.dot(&lu);
-            let b = lu.dot(&d);
-            let r_star = b / a;
-            let s_r = a.sqrt().recip();
-            let r_lo = (r_star - c * s_r).max(0.0);
-            let r_hi = r_star + c * s_r;
-            if r_hi <= 0.0 {
-                continue;
-            }
-            let log_g = self.log_g_with(beta, ln_sigma);
-            let dr = (r_hi - r_lo) / cfg.n_range as f64;
-            for ir in 0..cfg.n_range {
-                let r = r_lo + (ir as f64 + 0.5) * dr;
-                let q = -0.5 * (a * r * r - 2.0 * b * r + dd);
-                let log_n = -LN_2PI - 0.5 * ln_det + q;
-                let lw = (r * dr * db).ln() + log_n + lambda * log_g;
-                nodes.push(rho + r * u, lw, log_g);
-            }
-        }
+        let q = &pre.q[..];
+        pf_core::simd::vectorised(
+            #[inline(always)]
+            || {
+                for ib in 0..nb {
+                    let u_target = (ib as f64 + 0.5) * du;
+                    while cell + 1 < n_pre && acc + q[cell] < u_target {
+                        acc += q[cell];
+                        cell += 1;
+                    }
+                    let frac = ((u_target - acc) / q[cell]).clamp(0.0, 1.0);
+                    let beta = centre + lo0 + (cell as f64 + frac) * h_pre;
+                    let db = du * h_pre / q[cell];
+                    let u = Vector2::new(beta.cos(), beta.sin());
+                    // Along the ray ρ + r u: (p − m)ᵀΛ(p − m) = a r² − 2 b r + dᵀΛd.
+                    let lu = lambda_mat * u;
+                    let a = u.dot(&lu);
+                    let b = lu.dot(&d);
+                    let r_star = b / a;
+                    let s_r = a.sqrt().recip();
+                    let r_lo = (r_star - c * s_r).max(0.0);
+                    let r_hi = r_star + c * s_r;
+                    if r_hi <= 0.0 {
+                        continue;
+                    }
+                    let log_g = self.log_g_with(beta, ln_sigma);
+                    let dr = (r_hi - r_lo) / cfg.n_range as f64;
+                    // The ray's nodes in one loop of plain arithmetic (pf-core's `ln`), which LLVM
+                    // vectorises.
+                    let start = nodes.len();
+                    let end = start + cfg.n_range;
+                    nodes.points.resize(end, SVector::zeros());
+                    nodes.log_w.resize(end, 0.0);
+                    nodes.log_g.resize(end, log_g);
+                    let ray = nodes.points[start..]
+                        .iter_mut()
+                        .zip(&mut nodes.log_w[start..]);
+                    for (ir, (p, lw)) in ray.enumerate() {
+                        let r = r_lo + (ir as f64 + 0.5) * dr;
+                        let q = -0.5 * (a * r * r - 2.0 * b * r + dd);
+                        let log_n = -LN_2PI - 0.5 * ln_det + q;
+                        *lw = ln(r * dr * db) + log_n + lambda * log_g;
+                        *p = rho + r * u;
+                    }
+                }
+            },
+        );
         Ok(())
     }
 }
@@ -598,6 +712,10 @@ pub fn log_density<const D: usize>(g: &Gaussian<D>, p: &SVector<f64, D>) -> f64 
 /// 1.2·10⁻⁷ everywhere (Chebyshev fit of W. H. Press et al., *Numerical Recipes*, 2nd ed.,
 /// §6.2, `erfcc`). Used only to place the bearing grid, where this accuracy is ample; no
 /// workspace dependency provides it.
+///
+/// Plain arithmetic and pf-core's branch-free [`exp`] (within 1 ulp of glibc's), so that a
+/// loop over it vectorises.
+#[inline(always)]
 pub fn erfc(x: f64) -> f64 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
@@ -609,7 +727,7 @@ pub fn erfc(x: f64) -> f64 {
                         + t * (0.278_868_07
                             + t * (-1.135_203_98
                                 + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    let r = t * poly.exp();
+    let r = t * exp(poly);
     if x >= 0.0 { r } else { 2.0 - r }
 }
 
@@ -640,6 +758,53 @@ mod tests {
         }
         let pad = 0.02 * (hi - lo);
         Some((bc, lo - pad, hi + pad))
+    }
+
+    /// The normalised weights and the log normaliser are pf-core's `normalise`'s to a few
+    /// ulp, the log-weights are left as given, and a NaN, a `+∞` or no positive weight is
+    /// an error.
+    #[test]
+    fn nodes_normalise_as_pf_core_does() {
+        for n in [1usize, 7, 8, 9, 1152] {
+            let mut nodes = Nodes::<2>::new();
+            for j in 0..n {
+                let lw =
+                    -0.5 * (j as f64 * 0.01 - 3.0).powi(2) + if j % 5 == 0 { -800.0 } else { 0.0 };
+                nodes.push(SVector::zeros(), lw, 0.0);
+            }
+            let given = nodes.log_w.clone();
+            let c = nodes.normalise(0, 1.0).unwrap();
+            let (mut l, mut w) = (given.clone(), vec![0.0; n]);
+            let c_ref = pf_core::weights::normalise(0, &mut l, &mut w).unwrap();
+            assert!((c - c_ref).abs() <= 1e-14 * c_ref.abs().max(1.0), "n = {n}");
+            for (a, b) in nodes.w.iter().zip(&w) {
+                assert!(
+                    (a - b).abs() <= 4.0 * f64::EPSILON * b,
+                    "n = {n}: {a} against {b}"
+                );
+            }
+            assert_eq!(nodes.log_w, given);
+        }
+        for bad in [f64::NAN, f64::INFINITY] {
+            let mut nodes = Nodes::<2>::new();
+            for j in 0..11 {
+                nodes.push(SVector::zeros(), if j == 9 { bad } else { 0.0 }, 0.0);
+            }
+            assert!(matches!(
+                nodes.normalise(3, 0.5),
+                Err(HomotopyError::Core(pf_core::CoreError::NonFiniteWeight {
+                    t: 3,
+                    index: 9,
+                    ..
+                }))
+            ));
+        }
+        let mut nodes = Nodes::<2>::new();
+        nodes.push(SVector::zeros(), f64::NEG_INFINITY, 0.0);
+        assert!(matches!(
+            nodes.normalise(2, 0.5),
+            Err(HomotopyError::DegenerateQuadrature { k: 2, .. })
+        ));
     }
 
     /// The diamond angle increases with the angle over the whole circle.

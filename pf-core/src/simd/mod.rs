@@ -105,6 +105,18 @@ pub(crate) fn dispatch<R>(simd: Simd, f: impl FnOnce() -> R) -> R {
     f()
 }
 
+/// Run `f` compiled with AVX2 and FMA enabled where the CPU has both, so that LLVM
+/// vectorises its loops four lanes wide: for loops over [`special`]'s functions outside the
+/// batch filter (whose model calls are compiled so already).
+///
+/// `f` should be an `#[inline(always)]` closure whose helpers are `#[inline(always)]` too.
+/// Rust never fuses a multiply and an add on its own, so `f` gives the same bits in either
+/// copy.
+#[inline]
+pub fn vectorised<R>(f: impl FnOnce() -> R) -> R {
+    dispatch(Simd::Auto, f)
+}
+
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     /// `f` compiled with AVX2 and FMA enabled.
