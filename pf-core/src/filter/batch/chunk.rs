@@ -345,10 +345,23 @@ fn walk<'p, M: BatchModel, Q, K: Fn(f64, f64, f64) -> usize>(
             let base = ctx.position(j);
             base..base + m
         });
-        for k in 0..dim {
-            let col = &mut p[k * len..(k + 1) * len];
+        // Two columns per pass over `idx`: half the index loads, and a loop body that does
+        // not depend on where the linker places a five-instruction loop (radar PF, one
+        // thread: 15.2 → 14.7 ns per particle-step at N = 10⁴, 19.0 → 17.7 at 10⁶).
+        let idx = &idx[..len];
+        let mut k = 0;
+        while k + 2 <= dim {
+            let (o0, o1) = p[k * len..(k + 2) * len].split_at_mut(len);
+            let (s0, s1) = (&ctx.x_old[k * c..], &ctx.x_old[(k + 1) * c..]);
+            for ((o0, o1), &a) in o0.iter_mut().zip(o1.iter_mut()).zip(idx) {
+                *o0 = s0[a];
+                *o1 = s1[a];
+            }
+            k += 2;
+        }
+        if k < dim {
             let src = &ctx.x_old[k * c..];
-            for (o, &a) in col.iter_mut().zip(&idx[..len]) {
+            for (o, &a) in p[k * len..(k + 1) * len].iter_mut().zip(idx) {
                 *o = src[a];
             }
         }
