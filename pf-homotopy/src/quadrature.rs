@@ -23,7 +23,7 @@ use crate::param::{Gaussian, log_normal};
 use pf_core::gaussian::LN_2PI;
 use pf_core::geometry::wrap_angle;
 use pf_core::params::{ParamError, positive};
-use pf_core::simd::math::{exp_nonpositive, exp_nonpositive_lanes};
+use pf_core::simd::math::exp_nonpositive;
 use pf_core::simd::special::{exp, ln};
 
 /// Quadrature nodes, reused from one call to the next (no allocation once grown).
@@ -79,10 +79,8 @@ impl<const D: usize> Nodes<D> {
     /// returns `log Σ_j w_j`, the log of the integral `∫ g^λ N dp`. [`Nodes::log_w`] is left
     /// as it was. `k`, `lambda` label the error.
     ///
-    /// The maximum and the sum run over eight interleaved partial results (the sum's
-    /// lanes added in order at the end), so that the loops vectorise instead of waiting on
-    /// one running value; `exp` is pf-core's [`exp_nonpositive`], as in
-    /// [`pf_core::weights::normalise`].
+    /// By [`pf_core::weights::normalise_into`], whose maximum and sum run over interleaved
+    /// partial results, so that the loops vectorise.
     ///
     /// # Errors
     /// [`pf_core::CoreError::NonFiniteWeight`] for a NaN or `+∞` log-weight,
@@ -92,31 +90,12 @@ impl<const D: usize> Nodes<D> {
             return Err(HomotopyError::DegenerateQuadrature { k, lambda });
         }
         self.w.resize(self.log_w.len(), 0.0);
-        let (log_w, w) = (&self.log_w[..], &mut self.w[..]);
-        let (max, finite) = pf_core::simd::vectorised(
-            #[inline(always)]
-            || lane_max(log_w),
-        );
-        if !finite {
-            let (index, &value) = log_w
-                .iter()
-                .enumerate()
-                .find(|(_, l)| l.is_nan() || **l == f64::INFINITY)
-                .expect("a lane saw a NaN or +∞");
-            return Err(pf_core::CoreError::NonFiniteWeight { t: k, index, value }.into());
-        }
-        if max == f64::NEG_INFINITY {
-            return Err(HomotopyError::DegenerateQuadrature { k, lambda });
-        }
-        let sum = pf_core::simd::vectorised(
-            #[inline(always)]
-            || exp_lanes_sum(log_w, max, w),
-        );
-        let inv = 1.0 / sum;
-        for wi in w.iter_mut() {
-            *wi *= inv;
-        }
-        Ok(max + sum.ln())
+        pf_core::weights::normalise_into(k, &self.log_w, &mut self.w).map_err(|e| match e {
+            pf_core::CoreError::AllWeightsZero { .. } => {
+                HomotopyError::DegenerateQuadrature { k, lambda }
+            }
+            e => e.into(),
+        })
     }
 
     /// `Σ_j w_j φ(p_j)` with the normalised weights.
@@ -127,59 +106,6 @@ impl<const D: usize> Nodes<D> {
             .map(|(p, w)| w * phi(p))
             .sum()
     }
-}
-
-/// Interleaved partial results of [`Nodes::normalise`]'s loops.
-const LANES: usize = 8;
-
-/// The largest of `l` and whether every value is below `+∞` (no NaN, no `+∞`), over
-/// [`LANES`] running maxima.
-#[inline(always)]
-fn lane_max(l: &[f64]) -> (f64, bool) {
-    let mut max = [f64::NEG_INFINITY; LANES];
-    let mut finite = [true; LANES];
-    let mut blocks = l.chunks_exact(LANES);
-    for b in &mut blocks {
-        for i in 0..LANES {
-            max[i] = max[i].max(b[i]);
-            finite[i] &= b[i] < f64::INFINITY;
-        }
-    }
-    for (i, &x) in blocks.remainder().iter().enumerate() {
-        max[i] = max[i].max(x);
-        finite[i] &= x < f64::INFINITY;
-    }
-    let m = max.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-    (m, finite.iter().all(|&f| f))
-}
-
-/// `w_i ← e^{l_i − max}` for every `i` (all `l_i ≤ max`), returning `Σ_i w_i` summed over
-/// [`LANES`] interleaved partial sums, added in lane order at the end.
-#[inline(always)]
-fn exp_lanes_sum(l: &[f64], max: f64, w: &mut [f64]) -> f64 {
-    let mut acc = [0.0f64; LANES];
-    let mut lb = l.chunks_exact(LANES);
-    let mut wb = w.chunks_exact_mut(LANES);
-    // `exp` a block of lanes at a time, each step over every lane before the next (one
-    // lane at a time, its table look-up kept the loop scalar); the same bits per value.
-    for (lc, wc) in (&mut lb).zip(&mut wb) {
-        let e = exp_nonpositive_lanes::<LANES>(std::array::from_fn(|i| lc[i] - max));
-        wc.copy_from_slice(&e);
-        for (a, y) in acc.iter_mut().zip(e) {
-            *a += y;
-        }
-    }
-    let (lr, wr) = (lb.remainder(), wb.into_remainder());
-    let mut x = [f64::NEG_INFINITY; LANES];
-    for (xi, &li) in x.iter_mut().zip(lr) {
-        *xi = li - max;
-    }
-    let e = exp_nonpositive_lanes(x);
-    for (i, wi) in wr.iter_mut().enumerate() {
-        *wi = e[i];
-        acc[i] += e[i];
-    }
-    acc.iter().sum()
 }
 
 /// A rule for `∫ φ(p) g(y|p)^λ N(p; m, P) dp`; see the module docs.

@@ -186,64 +186,6 @@ fn backward_row<M, F>(
     );
 }
 
-/// Interleaved partial results of [`normalise_lanes`].
-const LANES: usize = 8;
-
-/// `β_j ← e^{l_j − max} / Σ_i e^{l_i − max}` for the backward log-weights `l`: the maximum
-/// and the sum over [`LANES`] interleaved partial results (the sum's lanes added in order at
-/// the end), so that the loops vectorise instead of waiting on one running value; `exp` is
-/// pf-core's [`exp_nonpositive`](pf_core::simd::math::exp_nonpositive), as in
-/// [`pf_core::weights::normalise`]. `false` (and `beta` unspecified) when some `l_j` is NaN
-/// or `+∞`, or every one is `−∞`: the cases where that function fails.
-#[inline(always)]
-fn normalise_lanes(l: &[f64], beta: &mut [f64]) -> bool {
-    use pf_core::simd::math::exp_nonpositive_lanes;
-    let mut max = [f64::NEG_INFINITY; LANES];
-    let mut finite = [true; LANES];
-    let mut blocks = l.chunks_exact(LANES);
-    for b in &mut blocks {
-        for i in 0..LANES {
-            max[i] = max[i].max(b[i]);
-            finite[i] &= b[i] < f64::INFINITY;
-        }
-    }
-    for (i, &v) in blocks.remainder().iter().enumerate() {
-        max[i] = max[i].max(v);
-        finite[i] &= v < f64::INFINITY;
-    }
-    let max = max.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-    if !finite.iter().all(|&f| f) || max == f64::NEG_INFINITY {
-        return false;
-    }
-    let mut acc = [0.0f64; LANES];
-    let mut lb = l.chunks_exact(LANES);
-    let mut wb = beta.chunks_exact_mut(LANES);
-    // `exp` a block of lanes at a time, each step over every lane before the next (one
-    // lane at a time, its table look-up kept the loop scalar); the same bits per value.
-    for (lc, wc) in (&mut lb).zip(&mut wb) {
-        let e = exp_nonpositive_lanes::<LANES>(std::array::from_fn(|i| lc[i] - max));
-        wc.copy_from_slice(&e);
-        for (a, y) in acc.iter_mut().zip(e) {
-            *a += y;
-        }
-    }
-    let (lr, wr) = (lb.remainder(), wb.into_remainder());
-    let mut x = [f64::NEG_INFINITY; LANES];
-    for (xi, &li) in x.iter_mut().zip(lr) {
-        *xi = li - max;
-    }
-    let e = exp_nonpositive_lanes(x);
-    for (i, wi) in wr.iter_mut().enumerate() {
-        *wi = e[i];
-        acc[i] += e[i];
-    }
-    let inv = 1.0 / acc.iter().sum::<f64>();
-    for b in beta.iter_mut() {
-        *b *= inv;
-    }
-    true
-}
-
 /// [`backward_row`]'s body.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -265,7 +207,7 @@ fn backward_row_inline<M, F>(
     for ((lb, xj), lw) in scratch.log_beta.iter_mut().zip(prev).zip(log_w_prev) {
         *lb = lw + model.log_transition_density(k, xj, x, None);
     }
-    if !normalise_lanes(&scratch.log_beta, &mut scratch.beta) {
+    if pf_core::weights::normalise_into(k, &scratch.log_beta, &mut scratch.beta).is_err() {
         row.fill(f64::NAN);
         return;
     }
@@ -520,37 +462,6 @@ mod tests {
         step(&mut fs, 2, &[1.0, 0.0], &[0.25, 0.75]);
         assert_eq!(fs.t_stat(), [1.5, 0.5]);
         assert_eq!(fs.estimate().unwrap(), [0.25 * 1.5 + 0.75 * 0.5]);
-    }
-
-    /// The backward weights are pf-core's normalised weights to a few ulp, at every
-    /// remainder of the lane count; NaN, `+∞` and no positive weight fail as there.
-    #[test]
-    fn lane_normalisation_is_pf_cores() {
-        for n in [1usize, 7, 8, 9, 100, 1000] {
-            let l: Vec<f64> = (0..n)
-                .map(|j| {
-                    let e = j as f64 * 0.05 - 2.0;
-                    if j % 6 == 1 { -1e3 } else { -0.5 * e * e }
-                })
-                .collect();
-            let mut beta = vec![0.0; n];
-            assert!(normalise_lanes(&l, &mut beta));
-            let (mut lr, mut wr) = (l.clone(), vec![0.0; n]);
-            pf_core::weights::normalise(0, &mut lr, &mut wr).unwrap();
-            for (a, b) in beta.iter().zip(&wr) {
-                assert!(
-                    (a - b).abs() <= 4.0 * f64::EPSILON * b,
-                    "n = {n}: {a} against {b}"
-                );
-            }
-        }
-        let mut beta = [0.0; 10];
-        for bad in [f64::NAN, f64::INFINITY] {
-            let mut l = [0.0; 10];
-            l[9] = bad;
-            assert!(!normalise_lanes(&l, &mut beta));
-        }
-        assert!(!normalise_lanes(&[f64::NEG_INFINITY; 10], &mut beta));
     }
 
     #[test]
