@@ -87,6 +87,16 @@ impl Detections {
         let hi = self.rows.partition_point(|d| d.frame <= frame);
         lo..hi
     }
+
+    /// The positions of `frame`'s detections into `ys` (cleared first, so a caller's buffer is
+    /// reused frame after frame); returns their rows, whose start maps an index into `ys` back
+    /// to its row.
+    pub fn positions_into(&self, frame: i64, ys: &mut Vec<Vec2>) -> Range<usize> {
+        let rows = self.frame_rows(frame);
+        ys.clear();
+        ys.extend(self.rows[rows.clone()].iter().map(|d| d.position));
+        rows
+    }
 }
 
 /// One init row: a target's position at one of its first frames.
@@ -323,6 +333,11 @@ mod tests {
         let d = Detections::new(vec![det(2, 0.0), det(2, 1.0), det(5, 2.0)]).unwrap();
         assert_eq!(d.frames(), [2, 5]);
         assert_eq!(d.frame_rows(2), 0..2);
+        let mut ys = vec![Vec2::new(9.0, 9.0)];
+        assert_eq!(d.positions_into(5, &mut ys), 2..3);
+        assert_eq!(ys, [Vec2::new(2.0, 0.0)]);
+        assert_eq!(d.positions_into(3, &mut ys), 2..2);
+        assert!(ys.is_empty());
         assert_eq!(d.frame_rows(3), 2..2);
         assert_eq!(d.frame_rows(5), 2..3);
         let e = Detections::new(vec![det(3, 0.0), det(2, 0.0)]).unwrap_err();

@@ -779,9 +779,7 @@ pub fn track<R: Rng + ?Sized>(
     let mut records = Vec::new();
     let mut ys = Vec::new();
     for &frame in &frames {
-        let rows = detections.frame_rows(frame);
-        ys.clear();
-        ys.extend(detections.rows()[rows.clone()].iter().map(|d| d.position));
+        let rows = detections.positions_into(frame, &mut ys);
         let out = tracker.step(frame, &ys, rng)?.to_vec();
         for (i, tr) in tracks.iter_mut().enumerate() {
             let e = tracker.estimate(i);
@@ -862,12 +860,7 @@ pub fn energies_at<R: Rng + ?Sized>(
     let mut tracker = Tracker::new(init, cfg, rng)?;
     let mut ys = Vec::new();
     for &f in frames.iter().take_while(|&&f| f < frame) {
-        ys.clear();
-        ys.extend(
-            detections.rows()[detections.frame_rows(f)]
-                .iter()
-                .map(|d| d.position),
-        );
+        detections.positions_into(f, &mut ys);
         tracker.step(f, &ys, rng)?;
     }
     let rows = detections.frame_rows(frame);

@@ -307,9 +307,7 @@ pub fn track_cv_kalman(
     let mut misses = vec![0usize; k];
     let mut ys = Vec::new();
     for &f in &frames {
-        let rows = detections.frame_rows(f);
-        ys.clear();
-        ys.extend(detections.rows()[rows.clone()].iter().map(|d| d.position));
+        let rows = detections.positions_into(f, &mut ys);
         kf.step(f, &ys, &mut out);
         for (i, tr) in tracks.iter_mut().enumerate() {
             let p = kf.position(i);

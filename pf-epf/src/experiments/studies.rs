@@ -152,13 +152,7 @@ fn instrumented_run(
         records: Vec::new(),
     };
     for &f in &frames {
-        let rows = sim.detections.frame_rows(f);
-        ys.clear();
-        ys.extend(
-            sim.detections.rows()[rows.clone()]
-                .iter()
-                .map(|d| d.position),
-        );
+        let rows = sim.detections.positions_into(f, &mut ys);
         let out = t.step(f, &ys, rng)?.to_vec();
         // Eq. (1) on every target at once (the tracker may associate in two rounds, see
         // `tracker`; the counts are of the one-round rule on the same frame).
@@ -370,13 +364,7 @@ fn search_wrong_frame(
         let mut t = Tracker::new(&sim.init, &cfg, &mut rng)?;
         let mut ys: Vec<Vec2> = Vec::new();
         for &f in &frames {
-            let rows = sim.detections.frame_rows(f);
-            ys.clear();
-            ys.extend(
-                sim.detections.rows()[rows.clone()]
-                    .iter()
-                    .map(|d| d.position),
-            );
+            let rows = sim.detections.positions_into(f, &mut ys);
             let out = t.step(f, &ys, &mut rng)?.to_vec();
             let source = |j: usize| sim.detections.rows()[rows.start + j].target;
             let wrong = out
