@@ -506,6 +506,43 @@ fn chol_solve_lanes<const D: usize>(l: &[[Lanes; D]; D], inv: &[Lanes; D], b: &m
     }
 }
 
+/// `(M P Mᵀ + A, P Mᵀ)` of every lane for constant `M` (r×k) and `A` (r×r), the first
+/// symmetrised: the innovation covariance `C P Cᵀ + R` and the time update's
+/// `A^k P (A^k)ᵀ + Q^p`, with the cross term each needs next.
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn sandwich_lanes<const R: usize, const K: usize>(
+    m: &[[f64; K]; R],
+    p: &[[Lanes; K]; K],
+    a: &[[f64; R]; R],
+) -> ([[Lanes; R]; R], [[Lanes; R]; K]) {
+    let mut pmt = [[[0.0; TILE]; R]; K];
+    for b in 0..K {
+        for r in 0..R {
+            for c in 0..K {
+                let coef = m[r][c];
+                for q in 0..TILE {
+                    pmt[b][r][q] += p[b][c][q] * coef;
+                }
+            }
+        }
+    }
+    let mut s = [[[0.0; TILE]; R]; R];
+    for i in 0..R {
+        for j in 0..R {
+            s[i][j] = [a[i][j]; TILE];
+            for c in 0..K {
+                let coef = m[i][c];
+                for q in 0..TILE {
+                    s[i][j][q] += coef * pmt[c][j][q];
+                }
+            }
+        }
+    }
+    symmetrise_lanes(&mut s);
+    (s, pmt)
+}
+
 /// Make each lane's matrix symmetric, `(P + Pᵀ)/2`.
 #[inline(always)]
 fn symmetrise_lanes<const D: usize>(p: &mut [[Lanes; D]; D]) {
@@ -621,33 +658,15 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>>
         let mut e = [[0.0; TILE]; NY];
         let xp: [&[f64]; P] = std::array::from_fn(|c| &tile.xp[c][..]);
         self.model.h().residuals(t, y, &xp, TILE, &mut e);
-        let mut pct = [[[0.0; TILE]; NY]; K];
         for j in 0..NY {
             for a in 0..K {
                 let c = self.c[j][a];
                 for q in 0..TILE {
                     e[j][q] -= c * tile.xk[a][q];
                 }
-                for b in 0..K {
-                    for q in 0..TILE {
-                        pct[b][j][q] += tile.p[b][a][q] * c;
-                    }
-                }
             }
         }
-        let mut s = [[[0.0; TILE]; NY]; NY];
-        for i in 0..NY {
-            for j in 0..NY {
-                s[i][j] = [self.r[i][j]; TILE];
-                for a in 0..K {
-                    let c = self.c[i][a];
-                    for q in 0..TILE {
-                        s[i][j][q] += c * pct[a][j][q];
-                    }
-                }
-            }
-        }
-        symmetrise_lanes(&mut s);
+        let (s, pct) = sandwich_lanes(&self.c, &tile.p, &self.r);
         (e, s, pct)
     }
 
@@ -761,31 +780,8 @@ impl<const P: usize, const K: usize, const NY: usize, H: Measurement<P, NY>>
     /// `x̂^k := F^k x̂^k + F^p x^p + L w`, `P := F^k P (F^k)ᵀ + Q^k − L M Lᵀ`.
     #[inline(always)]
     pub(crate) fn time_update(&self, z: &[Lanes; P], tile: &mut Tile<P, K>) {
-        // P_A = P (A^k)ᵀ (k×p); M = A^k P_A + Q^p
-        let mut pa = [[[0.0; TILE]; P]; K];
-        for a in 0..K {
-            for r in 0..P {
-                for b in 0..K {
-                    let c = self.a_k[r][b];
-                    for q in 0..TILE {
-                        pa[a][r][q] += tile.p[a][b][q] * c;
-                    }
-                }
-            }
-        }
-        let mut mm = [[[0.0; TILE]; P]; P];
-        for r in 0..P {
-            for s in 0..P {
-                mm[r][s] = [self.q_p[r][s]; TILE];
-                for a in 0..K {
-                    let c = self.a_k[r][a];
-                    for q in 0..TILE {
-                        mm[r][s][q] += c * pa[a][s][q];
-                    }
-                }
-            }
-        }
-        symmetrise_lanes(&mut mm);
+        // M = A^k P (A^k)ᵀ + Q^p and P_A = P (A^k)ᵀ (k×p)
+        let (mm, pa) = sandwich_lanes(&self.a_k, &tile.p, &self.q_p);
         let (lm, inv) = chol_lanes(&mm);
         // Row a of L: M⁻¹ (F^k P_A)[a]
         let mut lg = [[[0.0; TILE]; P]; K];
