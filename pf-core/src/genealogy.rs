@@ -7,6 +7,7 @@
 //! its variance grows with `n` and why the fixed-lag estimator exists.
 
 use crate::error::{CoreError, Result};
+use crate::observe::CloudRecorder;
 use crate::params::ParamError;
 use serde::{Deserialize, Serialize};
 
@@ -179,6 +180,49 @@ impl Genealogy {
     /// one ancestor. `None` if they never coalesce within the recorded steps.
     pub fn coalescence_time(&self) -> Option<usize> {
         self.surviving_counts().iter().rposition(|&c| c == 1)
+    }
+}
+
+/// A scalar filter run's particles and genealogy as plain numbers, what a genealogy figure
+/// draws (Cappé & Moulines, Fig. 1): index `k` is the step, `i` the particle.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GenealogyData {
+    /// `positions[k][i] = ξ_k^i`, for `k = 0 … n` (every row of the same length `N`).
+    pub positions: Vec<Vec<f64>>,
+    /// `ancestors[k][i] = A_k^i`, the index at step `k − 1` of the parent of particle `i` at
+    /// step `k`. `ancestors[0]` is empty (step 0 has no parents).
+    pub ancestors: Vec<Vec<usize>>,
+    /// `surviving[k][i]`: particle `i` at step `k` has a descendant at the last step.
+    pub surviving: Vec<Vec<bool>>,
+    /// The most recent step at which all surviving lineages share one ancestor, if any.
+    pub coalescence_time: Option<usize>,
+    /// The true hidden state `x_k`, where it is known (simulated data).
+    pub truth: Option<Vec<f64>>,
+}
+
+impl GenealogyData {
+    /// From a run's recorders: the clouds' positions and the genealogy's parents, survivors
+    /// and coalescence time.
+    pub fn recorded(clouds: &CloudRecorder<f64>, g: &Genealogy, truth: Option<Vec<f64>>) -> Self {
+        GenealogyData {
+            positions: clouds.positions(),
+            ancestors: (0..g.n_steps())
+                .map(|k| g.ancestors(k).map(<[usize]>::to_vec).unwrap_or_default())
+                .collect(),
+            surviving: g.alive_per_step(),
+            coalescence_time: g.coalescence_time(),
+            truth,
+        }
+    }
+
+    /// Number of steps `n + 1`.
+    pub fn n_steps(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of particles `N`.
+    pub fn n_particles(&self) -> usize {
+        self.positions.first().map_or(0, Vec::len)
     }
 }
 

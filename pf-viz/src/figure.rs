@@ -4,9 +4,8 @@
 //! imports the report or the other back-end: every module that draws depends on this one
 //! only.
 
-use pf_core::genealogy::Genealogy;
-use pf_core::observe::CloudRecorder;
-use serde::{Deserialize, Serialize};
+pub use pf_core::genealogy::GenealogyData;
+use serde::Serialize;
 
 use crate::error::{Result, VizError};
 
@@ -25,129 +24,87 @@ pub struct Table {
     pub rows: Vec<Vec<String>>,
 }
 
-/// Everything a genealogy figure shows, as plain numbers. Index `k` is the time step,
-/// `i` the particle.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct GenealogyData {
-    /// `positions[k][i] = ξ_k^i`, for `k = 0 … n` (every row of the same length `N`).
-    pub positions: Vec<Vec<f64>>,
-    /// `ancestors[k][i] = A_k^i`, the index at step `k − 1` of the parent of particle `i` at
-    /// step `k`. `ancestors[0]` is empty (step 0 has no parents).
-    pub ancestors: Vec<Vec<usize>>,
-    /// `surviving[k][i]`: particle `i` at step `k` has a descendant at the last step.
-    pub surviving: Vec<Vec<bool>>,
-    /// The most recent step at which all surviving lineages share one ancestor, if any.
-    pub coalescence_time: Option<usize>,
-    /// The true hidden state `x_k`, drawn as a reference when present.
-    pub truth: Option<Vec<f64>>,
-}
-
-impl GenealogyData {
-    /// The figure's data from a filter run's recorders: the clouds' positions and the
-    /// genealogy's parents, survivors and coalescence time.
-    pub fn recorded(clouds: &CloudRecorder<f64>, g: &Genealogy, truth: Option<Vec<f64>>) -> Self {
-        GenealogyData {
-            positions: clouds.positions(),
-            ancestors: (0..g.n_steps())
-                .map(|k| g.ancestors(k).map(<[usize]>::to_vec).unwrap_or_default())
-                .collect(),
-            surviving: g.alive_per_step(),
-            coalescence_time: g.coalescence_time(),
-            truth,
+/// Check a genealogy figure's shapes and indices, so drawing never indexes out of bounds.
+///
+/// # Errors
+/// [`VizError::PlotData`] naming the first inconsistency.
+pub fn validate_genealogy(data: &GenealogyData) -> Result<()> {
+    let bad = |message: String| {
+        Err(VizError::PlotData {
+            what: "genealogy figure",
+            message,
+        })
+    };
+    let (steps, n) = (data.n_steps(), data.n_particles());
+    if steps == 0 || n == 0 {
+        return bad(format!(
+            "no particles to draw ({steps} steps of {n} particles)"
+        ));
+    }
+    if data.ancestors.len() != steps || data.surviving.len() != steps {
+        return bad(format!(
+            "{steps} steps of positions but {} of ancestors and {} of survival flags",
+            data.ancestors.len(),
+            data.surviving.len()
+        ));
+    }
+    if !data.ancestors[0].is_empty() {
+        return bad("ancestors[0] must be empty: step 0 has no parents".into());
+    }
+    for k in 0..steps {
+        if data.positions[k].len() != n || data.surviving[k].len() != n {
+            return bad(format!("step {k}: rows must all hold N = {n} particles"));
         }
-    }
-
-    /// Number of steps `n + 1`.
-    pub fn n_steps(&self) -> usize {
-        self.positions.len()
-    }
-
-    /// Number of particles `N`.
-    pub fn n_particles(&self) -> usize {
-        self.positions.first().map_or(0, Vec::len)
-    }
-
-    /// Check shapes and indices, so drawing never indexes out of bounds.
-    ///
-    /// # Errors
-    /// [`VizError::PlotData`] naming the first inconsistency.
-    pub fn validate(&self) -> Result<()> {
-        let bad = |message: String| {
-            Err(VizError::PlotData {
-                what: "genealogy figure",
-                message,
-            })
-        };
-        let (steps, n) = (self.n_steps(), self.n_particles());
-        if steps == 0 || n == 0 {
+        if let Some((i, x)) = data.positions[k]
+            .iter()
+            .enumerate()
+            .find(|(_, x)| !x.is_finite())
+        {
             return bad(format!(
-                "no particles to draw ({steps} steps of {n} particles)"
+                "step {k}, particle {i}: position {x} is not finite"
             ));
         }
-        if self.ancestors.len() != steps || self.surviving.len() != steps {
-            return bad(format!(
-                "{steps} steps of positions but {} of ancestors and {} of survival flags",
-                self.ancestors.len(),
-                self.surviving.len()
-            ));
-        }
-        if !self.ancestors[0].is_empty() {
-            return bad("ancestors[0] must be empty: step 0 has no parents".into());
-        }
-        for k in 0..steps {
-            if self.positions[k].len() != n || self.surviving[k].len() != n {
-                return bad(format!("step {k}: rows must all hold N = {n} particles"));
-            }
-            if let Some((i, x)) = self.positions[k]
-                .iter()
-                .enumerate()
-                .find(|(_, x)| !x.is_finite())
-            {
+        if k > 0 {
+            if data.ancestors[k].len() != n {
                 return bad(format!(
-                    "step {k}, particle {i}: position {x} is not finite"
+                    "step {k}: {} ancestors for N = {n}",
+                    data.ancestors[k].len()
                 ));
             }
-            if k > 0 {
-                if self.ancestors[k].len() != n {
-                    return bad(format!(
-                        "step {k}: {} ancestors for N = {n}",
-                        self.ancestors[k].len()
-                    ));
-                }
-                if let Some(i) = self.ancestors[k].iter().position(|&a| a >= n) {
-                    return bad(format!(
-                        "step {k}, particle {i}: ancestor index out of range"
-                    ));
-                }
+            if let Some(i) = data.ancestors[k].iter().position(|&a| a >= n) {
+                return bad(format!(
+                    "step {k}, particle {i}: ancestor index out of range"
+                ));
             }
         }
-        if let Some(t) = self.coalescence_time
-            && t >= steps
-        {
-            return bad(format!(
-                "coalescence time {t} is past the last step {}",
-                steps - 1
-            ));
-        }
-        if let Some(x) = &self.truth
-            && x.len() != steps
-        {
-            return bad(format!("truth has {} values for {steps} steps", x.len()));
-        }
-        Ok(())
     }
+    if let Some(t) = data.coalescence_time
+        && t >= steps
+    {
+        return bad(format!(
+            "coalescence time {t} is past the last step {}",
+            steps - 1
+        ));
+    }
+    if let Some(x) = &data.truth
+        && x.len() != steps
+    {
+        return bad(format!("truth has {} values for {steps} steps", x.len()));
+    }
+    Ok(())
+}
 
-    /// Smallest and largest value on the y-axis: every position and the true state.
-    pub fn y_extent(&self) -> (f64, f64) {
-        let all = self
-            .positions
-            .iter()
-            .flatten()
-            .chain(self.truth.iter().flatten());
-        all.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
-            (lo.min(x), hi.max(x))
-        })
-    }
+/// Smallest and largest value on a genealogy figure's y-axis: every position and the true
+/// state.
+pub fn genealogy_y_extent(data: &GenealogyData) -> (f64, f64) {
+    let all = data
+        .positions
+        .iter()
+        .flatten()
+        .chain(data.truth.iter().flatten());
+    all.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+        (lo.min(x), hi.max(x))
+    })
 }
 
 #[cfg(test)]
@@ -166,25 +123,25 @@ mod tests {
 
     #[test]
     fn consistent_data_validate() {
-        small().validate().unwrap();
+        validate_genealogy(&small()).unwrap();
     }
 
     #[test]
     fn inconsistent_data_are_rejected() {
         let mut d = small();
         d.ancestors[2][0] = 2;
-        assert!(d.validate().is_err());
+        assert!(validate_genealogy(&d).is_err());
         let mut d = small();
         d.ancestors[0] = vec![0, 1];
-        assert!(d.validate().is_err());
+        assert!(validate_genealogy(&d).is_err());
         let mut d = small();
         d.positions[1].pop();
-        assert!(d.validate().is_err());
+        assert!(validate_genealogy(&d).is_err());
         let mut d = small();
         d.coalescence_time = Some(3);
-        assert!(d.validate().is_err());
+        assert!(validate_genealogy(&d).is_err());
         let mut d = small();
         d.positions[0][0] = f64::NAN;
-        assert!(d.validate().is_err());
+        assert!(validate_genealogy(&d).is_err());
     }
 }

@@ -14,7 +14,7 @@ use crate::ar1::{Ar1Data, Theta};
 use crate::em::paper_filter_config;
 use crate::error::Result;
 use pf_core::filter::{FilterConfig, ParticleFilter};
-use pf_core::genealogy::Genealogy;
+use pf_core::genealogy::{Genealogy, GenealogyData};
 use pf_core::mc::{mean_and_se, stream_rng};
 use pf_core::observe::{CloudRecorder, EssRecorder, GenealogyRecorder};
 use pf_core::params::at_least_one;
@@ -386,20 +386,13 @@ impl Fig1Config {
     }
 }
 
-/// Fig. 1's genealogy as plain numbers: index `k` is the time step, `i` the particle.
+/// Fig. 1: the particles and their genealogy as plain numbers, with what the recordings add.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Fig1Result {
-    /// `positions[k][i] = ξ_k^i`, for `k = 0 … n`.
-    pub positions: Vec<Vec<f64>>,
-    /// `ancestors[k][i] = A_k^i`, the index at step `k − 1` of the parent of particle `i`
-    /// at step `k`; `ancestors[0]` is empty.
-    pub ancestors: Vec<Vec<usize>>,
-    /// `surviving[k][i]`: particle `i` at step `k` has a descendant at the last step.
-    pub surviving: Vec<Vec<bool>>,
-    /// The most recent step at which all surviving lineages share one ancestor, if any.
-    pub coalescence_time: Option<usize>,
-    /// The hidden states `x_k` (simulated data only).
-    pub truth: Option<Vec<f64>>,
+    /// Positions, ancestors, survivors, coalescence time and (simulated data only) the
+    /// hidden states, at the top level of the JSON.
+    #[serde(flatten)]
+    pub paths: GenealogyData,
     /// `weights[k][i] = W_k^i`, normalised (for recordings).
     #[serde(skip)]
     pub weights: Vec<Vec<f64>>,
@@ -445,14 +438,9 @@ fn fig1_on(data: &Ar1Data, xs: Option<&[f64]>, cfg: &Fig1Config) -> Result<Fig1R
     )?;
     let (clouds, recorder, ess) = obs;
     let g = recorder.into_genealogy();
+    let truth = xs.and_then(|x| x.get(..=d.n())).map(<[f64]>::to_vec);
     Ok(Fig1Result {
-        positions: clouds.positions(),
-        ancestors: (0..g.n_steps())
-            .map(|k| g.ancestors(k).map(<[usize]>::to_vec).unwrap_or_default())
-            .collect(),
-        surviving: g.alive_per_step(),
-        coalescence_time: g.coalescence_time(),
-        truth: xs.and_then(|x| x.get(..=d.n())).map(<[f64]>::to_vec),
+        paths: GenealogyData::recorded(&clouds, &g, truth),
         weights: clouds.clouds.iter().map(|c| c.weights.clone()).collect(),
         ess: ess.ess(),
         lineage: g,
@@ -696,14 +684,16 @@ mod tests {
             ..Fig1Config::default()
         };
         let r = fig1(&cfg).unwrap();
-        assert_eq!(r.positions.len(), 31);
-        assert!(r.positions.iter().all(|p| p.len() == 20));
-        assert_eq!(r.ancestors.len(), 31);
-        assert!(r.ancestors[0].is_empty() && r.ancestors[1..].iter().all(|a| a.len() == 20));
-        assert_eq!(r.truth.as_ref().map(Vec::len), Some(31));
+        assert_eq!(r.paths.positions.len(), 31);
+        assert!(r.paths.positions.iter().all(|p| p.len() == 20));
+        assert_eq!(r.paths.ancestors.len(), 31);
+        assert!(
+            r.paths.ancestors[0].is_empty() && r.paths.ancestors[1..].iter().all(|a| a.len() == 20)
+        );
+        assert_eq!(r.paths.truth.as_ref().map(Vec::len), Some(31));
         assert_eq!((r.weights.len(), r.ess.len()), (31, 31));
-        if let Some(t) = r.coalescence_time {
-            assert_eq!(r.surviving[t].iter().filter(|&&s| s).count(), 1);
+        if let Some(t) = r.paths.coalescence_time {
+            assert_eq!(r.paths.surviving[t].iter().filter(|&&s| s).count(), 1);
         }
         assert_eq!(fig1(&cfg).unwrap(), r, "deterministic for its seed");
         let bad = Fig1Config {

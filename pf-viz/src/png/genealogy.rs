@@ -19,7 +19,7 @@ use plotters::prelude::*;
 use super::style::{self, plot_err};
 use super::{Canvas, render_png};
 use crate::error::Result;
-use crate::figure::GenealogyData;
+use crate::figure::{GenealogyData, genealogy_y_extent, validate_genealogy};
 
 /// Extra y range above the data, as a fraction of the data range, that holds the legend.
 const LEGEND_HEADROOM: f64 = 0.36;
@@ -41,7 +41,7 @@ pub struct GenealogyLabels {
 /// Inconsistent data ([`VizError::PlotData`](crate::VizError::PlotData)), or a plot or I/O
 /// error naming `path`.
 pub fn render(path: &Path, data: &GenealogyData, labels: &GenealogyLabels) -> Result<()> {
-    data.validate()?;
+    validate_genealogy(data)?;
     render_png(path, |root| draw(root, path, data, labels))
 }
 
@@ -53,7 +53,7 @@ fn draw(
 ) -> Result<()> {
     let err = plot_err(path);
     let last = (data.n_steps() - 1) as f64;
-    let (y_lo, y_hi) = data.y_extent();
+    let (y_lo, y_hi) = genealogy_y_extent(data);
     let (y_lo, y_hi) = style::padded(y_lo, y_hi, 0.06);
     // Headroom for the legend, so it never hides data.
     let y_hi = y_hi + LEGEND_HEADROOM * (y_hi - y_lo);

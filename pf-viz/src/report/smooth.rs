@@ -24,7 +24,6 @@ use serde::Serialize;
 use super::sd;
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
-use crate::figure::GenealogyData;
 use crate::png;
 use crate::png::boxplot::{BoxGroup, BoxPanel, BoxPlot, BoxStats};
 use crate::png::genealogy::GenealogyLabels;
@@ -212,7 +211,7 @@ pub fn run(ctx: &Context<'_>, config: SmoothConfig) -> Result<(SmoothResult, Vec
     ] {
         png::genealogy::render(
             &ctx.path(file),
-            &genealogy_data(g),
+            &g.paths,
             &GenealogyLabels {
                 title: format!(
                     "Particle genealogy: bootstrap filter, N = {}, {} resampling",
@@ -294,28 +293,12 @@ pub fn run(ctx: &Context<'_>, config: SmoothConfig) -> Result<(SmoothResult, Vec
                 weights: &g.weights,
                 ess: &g.ess,
             };
-            crate::rrd::smooth::save(
-                &ctx.path("smooth.rrd"),
-                &genealogy_data(g),
-                &extras,
-                &result.sem,
-            )?;
+            crate::rrd::smooth::save(&ctx.path("smooth.rrd"), &g.paths, &extras, &result.sem)?;
             files.push("smooth.rrd".to_owned());
         }
     }
 
     Ok((result, files))
-}
-
-/// Fig. 1's numbers as the genealogy figure takes them.
-fn genealogy_data(g: &Fig1Result) -> GenealogyData {
-    GenealogyData {
-        positions: g.positions.clone(),
-        ancestors: g.ancestors.clone(),
-        surviving: g.surviving.clone(),
-        coalescence_time: g.coalescence_time,
-        truth: g.truth.clone(),
-    }
 }
 
 fn resampler_name(r: pf_core::resample::Resampler) -> &'static str {
@@ -330,8 +313,8 @@ fn resampler_name(r: pf_core::resample::Resampler) -> &'static str {
 
 /// A run's coalescence in words.
 fn coalesced(g: &Fig1Result) -> String {
-    let last = g.positions.len().saturating_sub(1);
-    match g.coalescence_time {
+    let last = g.paths.positions.len().saturating_sub(1);
+    match g.paths.coalescence_time {
         Some(t) => format!(
             "In this run all final particles share one ancestor at step {t}, {} steps back.",
             last - t

@@ -26,7 +26,7 @@ use rerun::{LineStrips2D, Points2D, RecordingStream, Scalars, SeriesLines};
 use super::layout::{self, Bounds, Node, View};
 use super::{STEP, rrd_err, save_rrd};
 use crate::error::{Result, VizError};
-use crate::figure::GenealogyData;
+use crate::figure::{GenealogyData, validate_genealogy};
 
 /// Root entity of the genealogy.
 pub const ROOT: &str = "core/genealogy";
@@ -85,7 +85,7 @@ impl Frame {
 /// # Errors
 /// Inconsistent data, or a Rerun or I/O error naming `path`.
 pub fn save(path: &Path, data: &GenealogyData, extras: &GenealogyExtras<'_>) -> Result<()> {
-    data.validate()?;
+    validate_genealogy(data)?;
     let (steps, n) = (data.n_steps(), data.n_particles());
     if extras.genealogy.n_steps() != steps
         || extras.genealogy.n_particles() != n
