@@ -162,97 +162,95 @@ where
     }
 }
 
-/// `row ← T_k^i = Σ_j β^{ij} [T_{k−1}^j + s_{k−1}(ξ_{k−1}^j, x)]` for the particle `x`, or
-/// NaN when no `j` has a positive backward weight; compiled with AVX2 where the CPU has it
-/// ([`pf_core::simd::vectorised`]), so that its loops over `j` run four lanes wide.
-#[allow(clippy::too_many_arguments)] // the recursion's inputs, named as in the module docs
-fn backward_row<M, F>(
-    model: &M,
-    f: &F,
+/// What every row of step `k` reads: the model, the functional, and step `k − 1`'s
+/// particles, normalised log-weights and statistics `T_{k−1}` (`d` per particle).
+struct BackwardStep<'a, M: TransitionDensity, F> {
+    model: &'a M,
+    f: &'a F,
     k: usize,
-    prev: &[M::State],
-    log_w_prev: &[f64],
-    t_prev: &[f64],
-    x: &M::State,
-    scratch: &mut Row,
-    row: &mut [f64],
-) where
-    M: TransitionDensity<Input = ()>,
-    F: AdditiveFunctional<M::State>,
-{
-    pf_core::simd::vectorised(
-        #[inline(always)]
-        || backward_row_inline(model, f, k, prev, log_w_prev, t_prev, x, scratch, row),
-    );
+    prev: &'a [M::State],
+    log_w_prev: &'a [f64],
+    t_prev: &'a [f64],
 }
 
-/// [`backward_row`]'s body.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn backward_row_inline<M, F>(
-    model: &M,
-    f: &F,
-    k: usize,
-    prev: &[M::State],
-    log_w_prev: &[f64],
-    t_prev: &[f64],
-    x: &M::State,
-    scratch: &mut Row,
-    row: &mut [f64],
-) where
+impl<M, F> BackwardStep<'_, M, F>
+where
     M: TransitionDensity<Input = ()>,
     F: AdditiveFunctional<M::State>,
 {
-    let d = row.len();
-    for ((lb, xj), lw) in scratch.log_beta.iter_mut().zip(prev).zip(log_w_prev) {
-        *lb = lw + model.log_transition_density(k, xj, x, None);
+    /// `row ← T_k^i = Σ_j β^{ij} [T_{k−1}^j + s_{k−1}(ξ_{k−1}^j, x)]` for the particle `x`,
+    /// or NaN when no `j` has a positive backward weight; compiled with AVX2 where the CPU
+    /// has it ([`pf_core::simd::vectorised`]), so that its loops over `j` run four lanes
+    /// wide.
+    fn row(&self, x: &M::State, scratch: &mut Row, row: &mut [f64]) {
+        pf_core::simd::vectorised(
+            #[inline(always)]
+            || self.row_inline(x, scratch, row),
+        );
     }
-    if pf_core::weights::normalise_into(k, &scratch.log_beta, &mut scratch.beta).is_err() {
-        row.fill(f64::NAN);
-        return;
-    }
-    // Σ_j β^{ij} T_{k−1}^j, four components at a time in a local accumulator (summed in
-    // the row itself, each `j` waited on the row's previous store).
-    // A zero weight is skipped, not multiplied: `T_{k−1}^j` may be NaN (no backward weight
-    // at an earlier step), and `0 · NaN` would spread it to every row.
-    for (c0, out) in (0..d).step_by(4).zip(row.chunks_mut(4)) {
-        let w = out.len();
-        let mut acc = [0.0f64; 4];
-        if w == 4 {
-            // The common case in registers (a slice of run-time length kept `acc` on the
-            // stack, a third of the row's time), over two interleaved partial sums (even
-            // and odd `j`, added at the end) so that consecutive `j` do not wait on each
-            // other's additions.
-            let (mut even, mut odd) = ([0.0f64; 4], [0.0f64; 4]);
-            let add = |a: &mut [f64; 4], b: f64, tj: &[f64]| {
-                if b != 0.0 {
-                    let t4 = &tj[c0..c0 + 4];
-                    for (a, t) in a.iter_mut().zip(t4) {
-                        *a += b * t;
-                    }
-                }
-            };
-            let mut rows = scratch.beta.iter().zip(t_prev.chunks_exact(d));
-            while let Some((&b0, t0)) = rows.next() {
-                add(&mut even, b0, t0);
-                if let Some((&b1, t1)) = rows.next() {
-                    add(&mut odd, b1, t1);
-                }
-            }
-            acc = std::array::from_fn(|l| even[l] + odd[l]);
-        } else {
-            for (&b, tj) in scratch.beta.iter().zip(t_prev.chunks_exact(d)) {
-                if b != 0.0 {
-                    for (l, a) in acc[..w].iter_mut().enumerate() {
-                        *a += b * tj[c0 + l];
-                    }
-                }
-            }
+
+    /// [`row`](Self::row)'s body.
+    #[inline(always)]
+    fn row_inline(&self, x: &M::State, scratch: &mut Row, row: &mut [f64]) {
+        let BackwardStep {
+            model,
+            f,
+            k,
+            prev,
+            log_w_prev,
+            t_prev,
+        } = *self;
+        let d = row.len();
+        for ((lb, xj), lw) in scratch.log_beta.iter_mut().zip(prev).zip(log_w_prev) {
+            *lb = lw + model.log_transition_density(k, xj, x, None);
         }
-        out.copy_from_slice(&acc[..w]);
+        if pf_core::weights::normalise_into(k, &scratch.log_beta, &mut scratch.beta).is_err() {
+            row.fill(f64::NAN);
+            return;
+        }
+        // Σ_j β^{ij} T_{k−1}^j, four components at a time in a local accumulator (summed in
+        // the row itself, each `j` waited on the row's previous store).
+        // A zero weight is skipped, not multiplied: `T_{k−1}^j` may be NaN (no backward weight
+        // at an earlier step), and `0 · NaN` would spread it to every row.
+        for (c0, out) in (0..d).step_by(4).zip(row.chunks_mut(4)) {
+            let w = out.len();
+            let mut acc = [0.0f64; 4];
+            if w == 4 {
+                // The common case in registers (a slice of run-time length kept `acc` on the
+                // stack, a third of the row's time), over two interleaved partial sums (even
+                // and odd `j`, added at the end) so that consecutive `j` do not wait on each
+                // other's additions.
+                let (mut even, mut odd) = ([0.0f64; 4], [0.0f64; 4]);
+                let add = |a: &mut [f64; 4], b: f64, tj: &[f64]| {
+                    if b != 0.0 {
+                        let t4 = &tj[c0..c0 + 4];
+                        for (a, t) in a.iter_mut().zip(t4) {
+                            *a += b * t;
+                        }
+                    }
+                };
+                let mut rows = scratch.beta.iter().zip(t_prev.chunks_exact(d));
+                while let Some((&b0, t0)) = rows.next() {
+                    add(&mut even, b0, t0);
+                    if let Some((&b1, t1)) = rows.next() {
+                        add(&mut odd, b1, t1);
+                    }
+                }
+                acc = std::array::from_fn(|l| even[l] + odd[l]);
+            } else {
+                for (&b, tj) in scratch.beta.iter().zip(t_prev.chunks_exact(d)) {
+                    if b != 0.0 {
+                        for (l, a) in acc[..w].iter_mut().enumerate() {
+                            *a += b * tj[c0 + l];
+                        }
+                    }
+                }
+            }
+            out.copy_from_slice(&acc[..w]);
+        }
+        // + Σ_j β^{ij} s_{k−1}(ξ_{k−1}^j, x), in the functional's closed form where it has one.
+        f.add_weighted_increments(k, prev, &scratch.beta, x, &mut scratch.s, row);
     }
-    // + Σ_j β^{ij} s_{k−1}(ξ_{k−1}^j, x), in the functional's closed form where it has one.
-    f.add_weighted_increments(k, prev, &scratch.beta, x, &mut scratch.s, row);
 }
 
 impl<M, F> ForwardSmoothing<M, F>
@@ -274,27 +272,27 @@ where
             }
         } else {
             self.tk_next.resize(n * d, 0.0);
-            let (model, f) = (&self.model, &self.f);
-            let (prev, log_w_prev, t_prev) = (&self.prev[..], &self.log_w_prev[..], &self.tk[..]);
-            let m = prev.len();
+            let step = BackwardStep {
+                model: &self.model,
+                f: &self.f,
+                k,
+                prev: &self.prev[..],
+                log_w_prev: &self.log_w_prev[..],
+                t_prev: &self.tk[..],
+            };
+            let m = step.prev.len();
             match self.par {
                 Par::Seq => {
                     self.scratch.resize(m, d);
                     for (x, row) in particles.iter().zip(self.tk_next.chunks_exact_mut(d)) {
-                        let s = &mut self.scratch;
-                        backward_row(model, f, k, prev, log_w_prev, t_prev, x, s, row);
+                        step.row(x, &mut self.scratch, row);
                     }
                 }
                 Par::Rayon => self
                     .tk_next
                     .par_chunks_exact_mut(d)
                     .zip(particles.par_iter())
-                    .for_each_init(
-                        || Row::sized(m, d),
-                        |s, (row, x)| {
-                            backward_row(model, f, k, prev, log_w_prev, t_prev, x, s, row)
-                        },
-                    ),
+                    .for_each_init(|| Row::sized(m, d), |s, (row, x)| step.row(x, s, row)),
             }
             std::mem::swap(&mut self.tk, &mut self.tk_next);
         }
