@@ -26,7 +26,7 @@ use super::genealogy::{Frame, GenealogyExtras, frame_bounds, log_axes, log_genea
 use super::layout::{self, Bounds, Corner, Node, View};
 use super::{ITERATION, rrd_err, save_rrd};
 use crate::error::Result;
-use crate::figure::GenealogyData;
+use crate::figure::{GenealogyData, validate_genealogy};
 
 /// Root entity of the genealogy.
 pub const GENEALOGY: &str = "smooth/genealogy";
@@ -63,7 +63,7 @@ pub fn save(
     extras: &GenealogyExtras<'_>,
     sem: &SemResult,
 ) -> Result<()> {
-    genealogy.validate()?;
+    validate_genealogy(genealogy)?;
     save_rrd(path, "pf-viz: smooth (Cappé & Moulines)", |rec, path| {
         let err = rrd_err(path);
         layout::send(rec, &blueprint(frame_bounds(genealogy)), Some(ITERATION)).map_err(&err)?;
