@@ -5,7 +5,7 @@
 //! The paper times each part and keeps the minimum "to avoid intervention from the operating
 //! system". On a shared machine that is not enough, so the design here is:
 //! - **CPU time, not wall time.** [`Stopwatch`] reads the calling thread's CPU clock where the
-//!   platform has one (Linux), so time spent waiting for a core does not count.
+//!   platform has one (the `cpu-time` crate), so time spent waiting for a core does not count.
 //! - **Interleaved rounds.** Every configuration (a product size, a particle count) is timed
 //!   in turn, and the whole sweep is repeated `rounds` times, so a slow spell of the machine
 //!   falls on all configurations alike instead of on one. Within a round a configuration is
@@ -41,48 +41,15 @@ pub const MIN_BLOCK_NS: f64 = 200_000.0;
 /// `m = p + k = 6`, the same for every partition.
 pub const RESAMPLED_STATE_DIM: usize = 6;
 
-#[cfg(all(target_os = "linux", target_pointer_width = "64"))]
-#[allow(unsafe_code)]
-mod thread_clock {
-    //! The calling thread's CPU clock, `clock_gettime(CLOCK_THREAD_CPUTIME_ID)`.
-
-    /// `struct timespec` on 64-bit Linux: two 64-bit fields.
-    #[repr(C)]
-    struct Timespec {
-        tv_sec: i64,
-        tv_nsec: i64,
-    }
-
-    unsafe extern "C" {
-        fn clock_gettime(clock_id: i32, tp: *mut Timespec) -> i32;
-    }
-
-    /// `CLOCK_THREAD_CPUTIME_ID` on Linux.
-    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
-
-    /// CPU time of the calling thread (ns), `None` if the clock cannot be read.
-    pub fn now_ns() -> Option<f64> {
-        let mut ts = Timespec {
-            tv_sec: 0,
-            tv_nsec: 0,
-        };
-        // SAFETY: `ts` is a valid, writable `struct timespec` for the duration of the call,
-        // and `clock_gettime` writes nothing else.
-        let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-        (rc == 0).then_some(ts.tv_sec as f64 * 1e9 + ts.tv_nsec as f64)
-    }
+/// CPU time of the calling thread (ns), `None` where the platform cannot read that clock.
+fn thread_cpu_ns() -> Option<f64> {
+    cpu_time::ThreadTime::try_now()
+        .ok()
+        .map(|t| t.as_duration().as_nanos() as f64)
 }
 
-#[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
-mod thread_clock {
-    //! No thread CPU clock on this platform: [`super::Stopwatch`] uses wall time.
-    pub fn now_ns() -> Option<f64> {
-        None
-    }
-}
-
-/// A stopwatch on the calling thread's CPU time where the platform has that clock (Linux),
-/// on wall time otherwise ([`Stopwatch::clock`] says which). CPU time leaves out the time
+/// A stopwatch on the calling thread's CPU time where the platform has that clock (Linux,
+/// macOS, Windows, the BSDs), on wall time otherwise ([`Stopwatch::clock`] says which). CPU time leaves out the time
 /// the thread waits for a core, which on a shared machine is most of the noise; it also
 /// leaves out work done on other threads, so time single-threaded code with it.
 #[derive(Debug, Clone, Copy)]
@@ -95,14 +62,14 @@ impl Stopwatch {
     /// Start now.
     pub fn start() -> Self {
         Self {
-            cpu_start: thread_clock::now_ns(),
+            cpu_start: thread_cpu_ns(),
             wall_start: Instant::now(),
         }
     }
 
     /// Nanoseconds since [`Stopwatch::start`].
     pub fn elapsed_ns(&self) -> f64 {
-        match (self.cpu_start, thread_clock::now_ns()) {
+        match (self.cpu_start, thread_cpu_ns()) {
             (Some(a), Some(b)) => (b - a).max(0.0),
             _ => self.wall_start.elapsed().as_nanos() as f64,
         }
@@ -115,7 +82,7 @@ impl Stopwatch {
 
     /// `"thread CPU time"` or `"wall time"`.
     pub fn clock() -> &'static str {
-        if thread_clock::now_ns().is_some() {
+        if thread_cpu_ns().is_some() {
             "thread CPU time"
         } else {
             "wall time"
@@ -1111,6 +1078,28 @@ pub fn calibrate(cfg: &CalibrateConfig) -> Result<Calibration> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// On Linux the stopwatch reads the thread's CPU clock: a 100 ms sleep counts as
+    /// (almost) nothing, and 30 ms of busy work counts, never more than the wall time.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn the_stopwatch_counts_cpu_time_not_sleep() {
+        assert_eq!(Stopwatch::clock(), "thread CPU time");
+        let sleep = Stopwatch::start();
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        let slept = sleep.elapsed_s();
+        assert!(slept < 0.02, "{slept} s of CPU time while sleeping");
+        let (busy, wall) = (Stopwatch::start(), Instant::now());
+        let mut x = 0u64;
+        while wall.elapsed().as_secs_f64() < 0.03 {
+            x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+        }
+        let (cpu, wall) = (busy.elapsed_s(), wall.elapsed().as_secs_f64());
+        assert!(
+            cpu > 0.0 && cpu <= wall + 1e-3,
+            "CPU {cpu} s in {wall} s of wall time"
+        );
+    }
 
     /// KKT conditions of NNLS: `c ≥ 0`, gradient `Aᵀr ≤ 0` where `c = 0`, `≈ 0` where `c > 0`.
     fn assert_kkt(cols: &[&[f64]], y: &[f64], c: &[f64]) {
