@@ -4,7 +4,7 @@
 //! degeneracy shows up, so this is also where it becomes an error instead of a NaN.
 
 use crate::error::{CoreError, Result};
-use crate::simd::math::exp_nonpositive_lanes;
+use crate::simd::math::{exp_nonpositive_lanes, max_and_flag_lanes};
 use crate::simd::{Simd, dispatch};
 
 /// Weights exponentiated at a time: the lanes of one call of the vectorised `exp`.
@@ -118,12 +118,12 @@ const LANES: usize = 8;
 /// [`CoreError::AllWeightsZero`] when every weight is zero or there is none.
 pub fn normalise_into(t: usize, log_w: &[f64], w: &mut [f64]) -> Result<f64> {
     debug_assert_eq!(log_w.len(), w.len());
-    let (max, finite) = dispatch(
+    let (max, bad) = dispatch(
         Simd::Auto,
         #[inline(always)]
-        || lane_max(log_w),
+        || max_and_flag_lanes::<LANES>(log_w),
     );
-    if !finite {
+    if bad {
         let (index, &value) = log_w
             .iter()
             .enumerate()
@@ -144,27 +144,6 @@ pub fn normalise_into(t: usize, log_w: &[f64], w: &mut [f64]) -> Result<f64> {
         *wi *= inv;
     }
     Ok(max + sum.ln())
-}
-
-/// The largest of `l` (`−∞` for none) and whether every value is below `+∞` (no NaN, no
-/// `+∞`), over [`LANES`] running maxima.
-#[inline(always)]
-fn lane_max(l: &[f64]) -> (f64, bool) {
-    let mut max = [f64::NEG_INFINITY; LANES];
-    let mut finite = [true; LANES];
-    let mut blocks = l.chunks_exact(LANES);
-    for b in &mut blocks {
-        for i in 0..LANES {
-            max[i] = max[i].max(b[i]);
-            finite[i] &= b[i] < f64::INFINITY;
-        }
-    }
-    for (i, &x) in blocks.remainder().iter().enumerate() {
-        max[i] = max[i].max(x);
-        finite[i] &= x < f64::INFINITY;
-    }
-    let m = max.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-    (m, finite.iter().all(|&f| f))
 }
 
 /// `w_i ← e^{l_i − max}` for every `i` (all `l_i ≤ max`), returning `Σ_i w_i` summed over

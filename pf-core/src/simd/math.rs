@@ -258,27 +258,36 @@ pub(crate) fn ceil_index(x: f64) -> usize {
     ((t.to_bits().wrapping_sub(ROUND_MAGIC.to_bits()) as i64) + i64::from(r < x)) as usize
 }
 
-/// The largest of `l` (`−∞` if empty), and whether any is NaN or `+∞`: four running maxima,
-/// compare-and-select. Without NaN the maximum is the same value in any order, so
-/// [`Avx512::max_and_flag`](super::avx512::Avx512::max_and_flag) may keep more (and takes its
-/// remainder here).
+/// The largest of `l` (`−∞` if empty), and whether any is NaN or `+∞`: the batch filter's
+/// chunk maximum over four running maxima (see [`max_and_flag_lanes`]).
 #[inline(always)]
 pub(crate) fn max_and_flag(l: &[f64]) -> (f64, bool) {
-    let mut m4 = [f64::NEG_INFINITY; 4];
-    let mut bad = false;
-    let mut blocks = l.chunks_exact(4);
+    max_and_flag_lanes::<4>(l)
+}
+
+/// [`max_and_flag`] over `L` running maxima and flags, compare-and-select, so that the loop
+/// vectorises `L` lanes wide. Without NaN the maximum is the same value in any order, so
+/// the lane count (and [`Avx512::max_and_flag`](super::avx512::Avx512::max_and_flag), which
+/// keeps more and takes its remainder here) changes nothing but the speed.
+#[inline(always)]
+pub(crate) fn max_and_flag_lanes<const L: usize>(l: &[f64]) -> (f64, bool) {
+    let mut m = [f64::NEG_INFINITY; L];
+    let mut bad = [false; L];
+    let mut blocks = l.chunks_exact(L);
     for b in &mut blocks {
-        for k in 0..4 {
-            bad |= b[k].is_nan() | (b[k] == f64::INFINITY);
-            m4[k] = if b[k] > m4[k] { b[k] } else { m4[k] };
+        for k in 0..L {
+            bad[k] |= b[k].is_nan() | (b[k] == f64::INFINITY);
+            m[k] = if b[k] > m[k] { b[k] } else { m[k] };
         }
     }
-    for &v in blocks.remainder() {
-        bad |= v.is_nan() | (v == f64::INFINITY);
-        m4[0] = if v > m4[0] { v } else { m4[0] };
+    for (k, &v) in blocks.remainder().iter().enumerate() {
+        bad[k] |= v.is_nan() | (v == f64::INFINITY);
+        m[k] = if v > m[k] { v } else { m[k] };
     }
-    let max_of = |a: f64, b: f64| if b > a { b } else { a };
-    (max_of(max_of(m4[0], m4[1]), max_of(m4[2], m4[3])), bad)
+    let max = m
+        .iter()
+        .fold(f64::NEG_INFINITY, |a, &b| if b > a { b } else { a });
+    (max, bad.iter().any(|&b| b))
 }
 
 /// The batch filter's map from a particle's cumulative weight `cw` within its chunk to its
