@@ -78,6 +78,12 @@ impl SplineOrder {
     }
 }
 
+impl std::fmt::Display for SplineOrder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl std::str::FromStr for SplineOrder {
     type Err = String;
     fn from_str(s: &str) -> std::result::Result<Self, String> {
@@ -404,6 +410,9 @@ mod tests {
             Ok(SplineOrder::CubicBSpline)
         );
         assert_eq!(SplineOrder::default(), SplineOrder::CubicBSplineEnd);
+        for order in SplineOrder::ALL {
+            assert_eq!(order.to_string().parse::<SplineOrder>(), Ok(order));
+        }
     }
 
     /// The B-spline's end derivatives applied from the last detection: the closed forms

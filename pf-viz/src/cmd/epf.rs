@@ -89,13 +89,13 @@ pub struct TrackerArgs {
     #[arg(long, value_name = "P", default_value_t = TrackerConfig::default().gate_probability)]
     pub gate: f64,
     /// The dynamic model that moves the particles and centres the gates (EPF step 2):
-    /// cubic_b_spline_end (the B-spline's end derivatives from the last detection, the
-    /// default), cubic_b_spline (its curve continued), linear (the chord) or quadratic.
-    #[arg(long, value_name = "ORDER", default_value = "cubic_b_spline_end")]
+    /// cubic_b_spline_end (the B-spline's end derivatives from the last detection),
+    /// cubic_b_spline (its curve continued), linear (the chord) or quadratic.
+    #[arg(long, value_name = "ORDER", default_value_t = TrackerConfig::default().spline)]
     pub spline: SplineOrder,
-    /// The dynamic model behind E²'s predictions: cubic_b_spline (the default),
-    /// cubic_b_spline_end, linear or quadratic.
-    #[arg(long, value_name = "ORDER", default_value = "cubic_b_spline")]
+    /// The dynamic model behind E²'s predictions: cubic_b_spline, cubic_b_spline_end,
+    /// linear or quadratic.
+    #[arg(long, value_name = "ORDER", default_value_t = TrackerConfig::default().energy_spline)]
     pub energy_spline: SplineOrder,
     /// Print one JSON object.
     #[arg(long)]
