@@ -7,8 +7,11 @@
 //! its variance grows with `n` and why the fixed-lag estimator exists.
 
 use crate::error::{CoreError, Result};
-use crate::observe::CloudRecorder;
+use crate::filter::{Mutation, ParticleFilter};
+use crate::model::StateSpaceModel;
+use crate::observe::{CloudRecorder, EssRecorder, GenealogyRecorder};
 use crate::params::ParamError;
+use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 /// Ancestor indices of every step: `A_k^i` for `k = 1, …, n`.
@@ -223,6 +226,60 @@ impl GenealogyData {
     /// Number of particles `N`.
     pub fn n_particles(&self) -> usize {
         self.positions.first().map_or(0, Vec::len)
+    }
+}
+
+/// A scalar filter's run with everything a genealogy figure and its recording show: the
+/// paths, the engine's genealogy, and each step's weights, ESS and resampling decision.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordedRun {
+    /// Positions, ancestors, survivors, coalescence time and (when known) the true states.
+    pub paths: GenealogyData,
+    /// The engine's genealogy.
+    pub lineage: Genealogy,
+    /// `weights[k][i] = W_k^i`, normalised.
+    pub weights: Vec<Vec<f64>>,
+    /// The effective sample size of every step, after reweighting.
+    pub ess: Vec<f64>,
+    /// Whether each step resampled.
+    pub resampled: Vec<bool>,
+    /// The filter's log-likelihood estimate `log p̂(y_{0:n})`.
+    pub log_lik: f64,
+}
+
+impl RecordedRun {
+    /// Run `pf` over `ys` (no inputs) with its clouds, genealogy and ESS recorded; `truth`
+    /// is the hidden state path where it is known.
+    ///
+    /// # Errors
+    /// The filter's errors ([`ParticleFilter::run`]) and a recorder's.
+    pub fn of<M, P, R>(
+        pf: &mut ParticleFilter<M, P>,
+        ys: &[Option<M::Obs>],
+        rng: &mut R,
+        truth: Option<Vec<f64>>,
+    ) -> Result<Self>
+    where
+        M: StateSpaceModel<State = f64>,
+        P: Mutation<M>,
+        R: Rng + ?Sized,
+    {
+        let mut observers = (
+            CloudRecorder::new(),
+            GenealogyRecorder::new(),
+            EssRecorder::new(),
+        );
+        let summary = pf.run(ys, None, rng, &mut observers)?;
+        let (clouds, genealogy, ess) = observers;
+        let lineage = genealogy.into_genealogy();
+        Ok(RecordedRun {
+            paths: GenealogyData::recorded(&clouds, &lineage, truth),
+            weights: clouds.clouds.into_iter().map(|c| c.weights).collect(),
+            ess: ess.ess(),
+            resampled: ess.resampled(),
+            log_lik: summary.log_lik,
+            lineage,
+        })
     }
 }
 

@@ -15,7 +15,8 @@
 //! | [`resample`] | multinomial, systematic, stratified and residual schemes |
 //! | [`simd`] | lock-step random lanes, vectorised ziggurat normals, run-time AVX2 dispatch |
 //! | [`filter`] | the SIR filter, bootstrap and guided mutations, resampling policy |
-//! | [`genealogy`] | ancestry: trajectories, surviving lineages, coalescence |
+//! | [`genealogy`] | ancestry: trajectories, surviving lineages, coalescence, a recorded run |
+//! | [`experiments`] | the engine's own experiment: a bootstrap filter's genealogy |
 //! | [`ancestry`] | pruned path storage: living trajectories in far less than `N·n` |
 //! | [`geometry`] | angle wrapping for bearings |
 //! | [`observe`] | the observer trait and recorders |
@@ -27,6 +28,7 @@
 pub mod ancestry;
 mod buffer;
 pub mod error;
+pub mod experiments;
 pub mod filter;
 pub mod gaussian;
 pub mod genealogy;

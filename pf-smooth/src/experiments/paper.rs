@@ -14,9 +14,8 @@ use crate::ar1::{Ar1Data, Theta};
 use crate::em::paper_filter_config;
 use crate::error::Result;
 use pf_core::filter::{FilterConfig, ParticleFilter};
-use pf_core::genealogy::{Genealogy, GenealogyData};
+use pf_core::genealogy::{Genealogy, GenealogyData, RecordedRun};
 use pf_core::mc::{mean_and_se, stream_rng};
-use pf_core::observe::{CloudRecorder, EssRecorder, GenealogyRecorder};
 use pf_core::params::at_least_one;
 use pf_core::resample::Resampler;
 use rand::Rng;
@@ -425,25 +424,18 @@ fn fig1_on(data: &Ar1Data, xs: Option<&[f64]>, cfg: &Fig1Config) -> Result<Fig1R
         ..paper_filter_config(cfg.particles)
     };
     let mut pf = ParticleFilter::bootstrap(model, fc)?;
-    let mut obs = (
-        CloudRecorder::new(),
-        GenealogyRecorder::new(),
-        EssRecorder::new(),
-    );
-    pf.run(
-        &d.filter_input(),
-        None,
-        &mut stream_rng(cfg.seed, 0),
-        &mut obs,
-    )?;
-    let (clouds, recorder, ess) = obs;
-    let g = recorder.into_genealogy();
     let truth = xs.and_then(|x| x.get(..=d.n())).map(<[f64]>::to_vec);
+    let run = RecordedRun::of(
+        &mut pf,
+        &d.filter_input(),
+        &mut stream_rng(cfg.seed, 0),
+        truth,
+    )?;
     Ok(Fig1Result {
-        paths: GenealogyData::recorded(&clouds, &g, truth),
-        weights: clouds.clouds.iter().map(|c| c.weights.clone()).collect(),
-        ess: ess.ess(),
-        lineage: g,
+        paths: run.paths,
+        weights: run.weights,
+        ess: run.ess,
+        lineage: run.lineage,
     })
 }
 
