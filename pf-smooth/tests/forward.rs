@@ -3,7 +3,7 @@
 
 use pf_core::TransitionDensity;
 use pf_core::filter::{EssThreshold, FilterConfig, ParticleFilter, ResamplePolicy};
-use pf_core::mc::{Par, mean_and_se, replicate, stream_rng};
+use pf_core::mc::{Par, mean_and_sd, mean_and_se, replicate, stream_rng};
 use pf_core::models::NoisyAr1;
 use pf_core::observe::CloudRecorder;
 use pf_core::resample::Resampler;
@@ -146,7 +146,7 @@ fn forward_smoothing_does_not_degenerate_like_the_path_space_estimator() {
                 .unwrap();
         (run.forward.unwrap().tau, run.joint.tau)
     });
-    let sd = |v: Vec<f64>| mean_and_se(&v).1 * (v.len() as f64).sqrt();
+    let sd = |v: Vec<f64>| mean_and_sd(&v).1;
     for c in 0..4 {
         let forward = sd(runs.iter().map(|r| r.0[c]).collect());
         let joint = sd(runs.iter().map(|r| r.1[c]).collect());

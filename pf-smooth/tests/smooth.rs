@@ -3,7 +3,7 @@
 
 use nalgebra::DVector;
 use pf_core::kalman::LinearGaussian;
-use pf_core::mc::{Par, mean_and_se, replicate, stream_rng};
+use pf_core::mc::{Par, mean_and_sd, mean_and_se, replicate, stream_rng};
 use pf_core::models::NoisyAr1;
 use pf_core::testing::joint_gaussian_posterior;
 use pf_smooth::em::{paper_filter_config, particle_statistics};
@@ -128,7 +128,7 @@ fn fixed_lag_has_a_clearly_smaller_spread_than_joint_at_n_500() {
             (j.m_step().unwrap(), f.unwrap().m_step().unwrap())
         })
     };
-    let sd = |v: Vec<f64>| mean_and_se(&v).1 * (v.len() as f64).sqrt();
+    let sd = |v: Vec<f64>| mean_and_sd(&v).1;
     let n100 = runs(100);
     let j2 = sd(n100.iter().map(|x| x.0.phi).collect());
     let f2 = sd(n100.iter().map(|x| x.1.phi).collect());

@@ -166,10 +166,23 @@ where
 
 /// Sample mean and standard error `σ̂/√R` of replicated values.
 pub fn mean_and_se(x: &[f64]) -> (f64, f64) {
+    let (mean, var) = mean_and_var(x);
+    (mean, (var / x.len() as f64).sqrt())
+}
+
+/// Sample mean and standard deviation `σ̂` of replicated values (divisor `R − 1`; the
+/// deviation is 0 below two values): the spread of one estimator across replications.
+pub fn mean_and_sd(x: &[f64]) -> (f64, f64) {
+    let (mean, var) = mean_and_var(x);
+    (mean, var.sqrt())
+}
+
+/// Sample mean and variance (divisor `R − 1`, 0 below two values).
+fn mean_and_var(x: &[f64]) -> (f64, f64) {
     let n = x.len() as f64;
     let mean = x.iter().sum::<f64>() / n;
     let var = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
-    (mean, (var / n).sqrt())
+    (mean, var)
 }
 
 /// Root mean square of replicated errors, from their squares, and its standard error by the
@@ -238,6 +251,19 @@ mod tests {
         assert_eq!(rms, 12.5f64.sqrt());
         assert!((se - 3.5 / (2.0 * 12.5f64.sqrt())).abs() < 1e-15, "{se}");
         assert_eq!(rms_and_se(&[0.0, 0.0]), (0.0, 0.0));
+    }
+
+    /// 1, 2, 3, 4: mean 2.5, squared deviations summing to 5, so the sample variance is 5/3
+    /// (divisor R − 1), the deviation √(5/3) and the standard error √(5/12); one value has
+    /// no spread.
+    #[test]
+    fn sample_deviation_and_standard_error_by_hand() {
+        let x = [1.0, 2.0, 3.0, 4.0];
+        assert_eq!(mean_and_sd(&x), (2.5, (5.0f64 / 3.0).sqrt()));
+        let (m, se) = mean_and_se(&x);
+        assert_eq!(m, 2.5);
+        assert!((se - (5.0f64 / 12.0).sqrt()).abs() < 1e-15, "{se}");
+        assert_eq!(mean_and_sd(&[7.0]), (7.0, 0.0));
     }
 
     #[test]

@@ -2,6 +2,7 @@
 //! estimate follows the simulated density, and the residual while that density is still flat.
 
 use super::Fig56Result;
+use pf_core::mc::mean_and_sd;
 use serde::{Deserialize, Serialize};
 
 /// Samples per window of [`flat_stretch`]'s local spread (150 s at `T_s` = 5 s).
@@ -10,12 +11,6 @@ pub const FLAT_WINDOW: usize = 30;
 /// The `ρ_o` residual std (kg/m³) that the measurement noise alone leaves in the linearised
 /// filter with the paper's noise levels (crate README).
 pub const NOISE_FLOOR: f64 = 7.2;
-
-/// The sample standard deviation (divisor `n − 1`, 0 below two values).
-fn sd(v: &[f64]) -> f64 {
-    let (_, se) = pf_core::mc::mean_and_se(v);
-    se * (v.len() as f64).sqrt()
-}
 
 /// The delay (s) by which `estimate` best follows `truth`: the shift, up to a fifth of the
 /// record, that minimises their mean squared difference. 0 for records too short to shift.
@@ -84,11 +79,11 @@ pub fn flat_stretch(t: &[f64], truth: &[f64], hat: &[f64]) -> FlatStretch {
     let resid: Vec<f64> = truth[..n].iter().zip(hat).map(|(a, b)| b - a).collect();
     let window_range = resid
         .chunks_exact(FLAT_WINDOW)
-        .map(sd)
+        .map(|w| mean_and_sd(w).1)
         .fold([f64::INFINITY, f64::NEG_INFINITY], |[l, h], w| {
             [l.min(w), h.max(w)]
         });
-    let std = sd(&resid);
+    let std = mean_and_sd(&resid).1;
     FlatStretch::Measured {
         start,
         from: t[0],

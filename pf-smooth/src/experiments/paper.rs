@@ -15,17 +15,11 @@ use crate::em::paper_filter_config;
 use crate::error::Result;
 use pf_core::filter::{FilterConfig, ParticleFilter};
 use pf_core::genealogy::{Genealogy, GenealogyData, RecordedRun};
-use pf_core::mc::{mean_and_se, stream_rng};
+use pf_core::mc::{mean_and_sd, mean_and_se, stream_rng};
 use pf_core::params::at_least_one;
 use pf_core::resample::Resampler;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
-
-/// The sample standard deviation (divisor `R − 1`).
-fn sd(v: &[f64]) -> f64 {
-    let (_, se) = mean_and_se(v);
-    se * (v.len() as f64).sqrt()
-}
 
 /// Section 5's experiments; [`SmoothConfig::at_scale`] gives the paper's values with the
 /// replication counts of each scale.
@@ -483,9 +477,9 @@ pub fn fixed_lag_claim(long: &[UpdateRuns], replications: usize) -> Option<Fixed
     let n100 = long.iter().find(|u| u.particles == 100)?;
     let f = n100.result.fixed_lag.as_ref()?;
     let (f2_sd, j3_sd, j2_sd) = (
-        sd(&f.phi),
-        sd(&j3.result.joint.phi),
-        sd(&n100.result.joint.phi),
+        mean_and_sd(&f.phi).1,
+        mean_and_sd(&j3.result.joint.phi).1,
+        mean_and_sd(&n100.result.joint.phi).1,
     );
     let ratio = f2_sd / j3_sd;
     let sd_rel_se = 1.0 / (2.0 * (replications.max(2) - 1) as f64).sqrt();
@@ -550,7 +544,7 @@ pub fn forward_reference(long: &[UpdateRuns]) -> Option<ForwardReference> {
     Some(ForwardReference {
         particles: runs.particles,
         exact,
-        sd: sd(&f.phi),
+        sd: mean_and_sd(&f.phi).1,
         mean,
         se,
         offset,
@@ -558,11 +552,15 @@ pub fn forward_reference(long: &[UpdateRuns]) -> Option<ForwardReference> {
         offset_in_se: offset.abs() / se.max(f64::MIN_POSITIVE),
         joint_offset: mean_off(&runs.result.joint.phi),
         fixed_lag_offset: runs.result.fixed_lag.as_ref().map(|l| mean_off(&l.phi)),
-        fixed_lag_sd: runs.result.fixed_lag.as_ref().map(|l| sd(&l.phi)),
+        fixed_lag_sd: runs
+            .result
+            .fixed_lag
+            .as_ref()
+            .map(|l| mean_and_sd(&l.phi).1),
         j3_sd: long
             .iter()
             .find(|u| u.particles == 1000)
-            .map(|u| sd(&u.result.joint.phi)),
+            .map(|u| mean_and_sd(&u.result.joint.phi).1),
     })
 }
 

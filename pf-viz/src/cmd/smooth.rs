@@ -223,10 +223,7 @@ fn print_theta(label: &str, t: &Theta) -> Result<()> {
 }
 
 fn print_samples(label: &str, s: &ThetaSamples) -> Result<()> {
-    let ms = |v: &[f64]| {
-        let (m, se) = pf_core::mc::mean_and_se(v);
-        (m, se * (v.len() as f64).sqrt())
-    };
+    let ms = pf_core::mc::mean_and_sd;
     let (p, ps) = ms(&s.phi);
     let (s2, s2s) = ms(&s.sigma2);
     let (r2, r2s) = ms(&s.rho2);

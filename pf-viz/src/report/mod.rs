@@ -48,12 +48,6 @@ pub const SECTIONS: &[Section] = &[
 /// at every scale.
 pub const RANK_LOCAL: &[&str] = &["mpf"];
 
-/// The sample standard deviation of replicated values (divisor `R − 1`).
-pub(crate) fn sd(v: &[f64]) -> f64 {
-    let (_, se) = pf_core::mc::mean_and_se(v);
-    se * (v.len() as f64).sqrt()
-}
-
 /// File name of the summary in the output directory.
 pub const SUMMARY: &str = "summary.json";
 /// File name of the self-contained HTML report.

@@ -21,7 +21,6 @@ use pf_smooth::experiments::{
 use pf_smooth::{Theta, ThetaSamples};
 use serde::Serialize;
 
-use super::sd;
 use super::{Context, Figure, Section, SectionReport, Table, to_json};
 use crate::error::{Result, VizError};
 use crate::png;
@@ -30,6 +29,7 @@ use crate::png::genealogy::GenealogyLabels;
 use crate::png::line::RefLine;
 use crate::png::style::{AxisScale, LegendPos};
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle};
+use pf_core::mc::mean_and_sd;
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
@@ -462,8 +462,9 @@ fn sweep_figure(ctx: &Context<'_>, config: &SmoothConfig, sweeps: &[LagSweepResu
                 for (l, samples) in s.fixed_lag.iter().enumerate() {
                     let v = [&samples.phi, &samples.sigma2, &samples.rho2][p];
                     let x = s.lags[l] as f64;
-                    bias.push([x, pf_core::mc::mean_and_se(v).0 - exact]);
-                    spread.push([x, sd(v)]);
+                    let (mean, sd) = mean_and_sd(v);
+                    bias.push([x, mean - exact]);
+                    spread.push([x, sd]);
                 }
                 all.extend(bias.iter().chain(&spread).map(|q| q[1]));
                 layers.push(Layer {
@@ -522,19 +523,19 @@ fn spread_table(r: &SmoothResult) -> Table {
         let col = |s: &ThetaSamples| [&s.phi, &s.sigma2, &s.rho2][which].clone();
         let mut row = vec![name.to_owned()];
         for u in &long {
-            row.push(format!("{:.4}", sd(&col(&u.result.joint))));
+            row.push(format!("{:.4}", mean_and_sd(&col(&u.result.joint)).1));
         }
         for u in &long {
             row.push(
                 u.result
                     .fixed_lag
                     .as_ref()
-                    .map(|f| format!("{:.4}", sd(&col(f))))
+                    .map(|f| format!("{:.4}", mean_and_sd(&col(f)).1))
                     .unwrap_or_default(),
             );
         }
         for (_, f) in &forward {
-            row.push(format!("{:.4}", sd(&col(f))));
+            row.push(format!("{:.4}", mean_and_sd(&col(f)).1));
         }
         row.push("F2 ≈ J3".into());
         rows.push(row);
