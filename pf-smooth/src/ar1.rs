@@ -333,11 +333,39 @@ impl ThetaSamples {
     pub fn is_empty(&self) -> bool {
         self.phi.is_empty()
     }
+
+    /// The three samples in the order (φ, σ², ρ²).
+    pub fn columns(&self) -> [&[f64]; 3] {
+        [&self.phi, &self.sigma2, &self.rho2]
+    }
+
+    /// The mean and sample standard deviation (divisor `R − 1`) of each of (φ, σ², ρ²) over
+    /// the replications: an estimator's centre and spread.
+    pub fn mean_and_sd(&self) -> [(f64, f64); 3] {
+        self.columns().map(pf_core::mc::mean_and_sd)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Three replications of (φ, σ², ρ²) = (1, 2, 3), (2, 4, 6), (3, 6, 9): means 2, 4, 6 and
+    /// sample deviations 1, 2, 3 (divisor 2).
+    #[test]
+    fn samples_summarise_each_parameter() {
+        let t = |a: f64| Theta {
+            phi: a,
+            sigma2: 2.0 * a,
+            rho2: 3.0 * a,
+        };
+        let s = ThetaSamples::from_thetas(&[t(1.0), t(2.0), t(3.0)]);
+        assert_eq!(
+            s.columns(),
+            [&[1.0, 2.0, 3.0][..], &[2.0, 4.0, 6.0], &[3.0, 6.0, 9.0]]
+        );
+        assert_eq!(s.mean_and_sd(), [(2.0, 1.0), (4.0, 2.0), (6.0, 3.0)]);
+    }
 
     #[test]
     fn bad_parameters_and_data_are_errors_not_panics() {

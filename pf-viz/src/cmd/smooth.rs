@@ -223,10 +223,7 @@ fn print_theta(label: &str, t: &Theta) -> Result<()> {
 }
 
 fn print_samples(label: &str, s: &ThetaSamples) -> Result<()> {
-    let ms = pf_core::mc::mean_and_sd;
-    let (p, ps) = ms(&s.phi);
-    let (s2, s2s) = ms(&s.sigma2);
-    let (r2, r2s) = ms(&s.rho2);
+    let [(p, ps), (s2, s2s), (r2, r2s)] = s.mean_and_sd();
     print_line(format_args!(
         "  {label:<30} φ = {p:>10.5} ± {ps:.5}  σ² = {s2:>10.5} ± {s2s:.5}  ρ² = {r2:>10.5} ± {r2s:.5}  (mean ± sd)"
     ))

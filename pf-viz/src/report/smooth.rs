@@ -29,7 +29,6 @@ use crate::png::genealogy::GenealogyLabels;
 use crate::png::line::RefLine;
 use crate::png::style::{AxisScale, LegendPos};
 use crate::png::xy::{Layer, LayerKind, XyPlot, XyStyle};
-use pf_core::mc::mean_and_sd;
 
 /// The section's registry entry.
 pub const SECTION: Section = Section {
@@ -460,9 +459,8 @@ fn sweep_figure(ctx: &Context<'_>, config: &SmoothConfig, sweeps: &[LagSweepResu
                 let mut bias = Vec::new();
                 let mut spread = Vec::new();
                 for (l, samples) in s.fixed_lag.iter().enumerate() {
-                    let v = [&samples.phi, &samples.sigma2, &samples.rho2][p];
                     let x = s.lags[l] as f64;
-                    let (mean, sd) = mean_and_sd(v);
+                    let (mean, sd) = samples.mean_and_sd()[p];
                     bias.push([x, mean - exact]);
                     spread.push([x, sd]);
                 }
@@ -520,22 +518,16 @@ fn spread_table(r: &SmoothResult) -> Table {
         .filter_map(|u| u.result.forward.as_ref().map(|f| (u.particles, f)))
         .collect();
     for (name, which) in [("φ", 0usize), ("σ²", 1), ("ρ²", 2)] {
-        let col = |s: &ThetaSamples| [&s.phi, &s.sigma2, &s.rho2][which].clone();
+        let sd = |s: &ThetaSamples| format!("{:.4}", s.mean_and_sd()[which].1);
         let mut row = vec![name.to_owned()];
         for u in &long {
-            row.push(format!("{:.4}", mean_and_sd(&col(&u.result.joint)).1));
+            row.push(sd(&u.result.joint));
         }
         for u in &long {
-            row.push(
-                u.result
-                    .fixed_lag
-                    .as_ref()
-                    .map(|f| format!("{:.4}", mean_and_sd(&col(f)).1))
-                    .unwrap_or_default(),
-            );
+            row.push(u.result.fixed_lag.as_ref().map(sd).unwrap_or_default());
         }
         for (_, f) in &forward {
-            row.push(format!("{:.4}", mean_and_sd(&col(f)).1));
+            row.push(sd(f));
         }
         row.push("F2 ≈ J3".into());
         rows.push(row);
