@@ -23,7 +23,7 @@
 //! | [`gaussian`] | multivariate normals and error ellipses |
 //! | [`kalman`] | linear-Gaussian model, Kalman filter, RTS smoother, UKF |
 //! | [`mc`] | reproducible parallel Monte Carlo replications |
-//! | [`metrics`] | RMSE, REC curves, residual summaries |
+//! | [`metrics`] | RMSE, REC curves, residual summaries, histograms and box-plot numbers |
 
 pub mod ancestry;
 mod buffer;

@@ -1,5 +1,6 @@
 //! Error metrics: RMSE as Karlsson et al. define it, REC curves, residual summaries, and
-//! equal-width histograms of residuals or estimates.
+//! the summaries a figure shows of replicated estimates: equal-width histograms and Tukey's
+//! box-plot numbers.
 
 use crate::error::{CoreError, Result};
 use crate::params::ParamError;
@@ -235,9 +236,99 @@ impl Histogram {
     }
 }
 
+/// Tukey's box-plot numbers of a sample: quartiles by linear interpolation (type 7, R's
+/// default `quantile`), whiskers to the furthest values within 1.5·IQR of the box, and the
+/// values beyond them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BoxStats {
+    /// First quartile (bottom of the box).
+    pub q1: f64,
+    /// Median (the bar inside the box).
+    pub median: f64,
+    /// Third quartile (top of the box).
+    pub q3: f64,
+    /// Lowest value ≥ q1 − 1.5·IQR (end of the lower whisker).
+    pub whisker_low: f64,
+    /// Highest value ≤ q3 + 1.5·IQR (end of the upper whisker).
+    pub whisker_high: f64,
+    /// Values beyond the whiskers.
+    pub outliers: Vec<f64>,
+    /// Sample size.
+    pub count: usize,
+    /// Sample mean (not drawn; kept for tables).
+    pub mean: f64,
+}
+
+impl BoxStats {
+    /// The box-plot numbers of `x`.
+    ///
+    /// # Errors
+    /// No values, or a non-finite value (whose place in the order would be arbitrary).
+    pub fn new(x: &[f64]) -> Result<Self> {
+        if x.is_empty() {
+            return Err(CoreError::Empty {
+                what: "box-plot values",
+            });
+        }
+        if let Some(index) = x.iter().position(|v| !v.is_finite()) {
+            return Err(CoreError::NonFiniteData {
+                what: "box-plot values",
+                index,
+                value: x[index],
+            });
+        }
+        let mut s = x.to_vec();
+        s.sort_by(f64::total_cmp);
+        let q = |p: f64| {
+            let h = p * (s.len() - 1) as f64;
+            let lo = h.floor() as usize;
+            let hi = h.ceil() as usize;
+            s[lo] + (h - lo as f64) * (s[hi] - s[lo])
+        };
+        let (q1, median, q3) = (q(0.25), q(0.5), q(0.75));
+        let iqr = q3 - q1;
+        let (lo_fence, hi_fence) = (q1 - 1.5 * iqr, q3 + 1.5 * iqr);
+        let inside = |v: &&f64| **v >= lo_fence && **v <= hi_fence;
+        // With few values the nearest value inside a fence can lie inside the box (an
+        // interpolated quartile sits between an outlier and it): the whisker then has length 0.
+        let whisker_low = s.iter().find(inside).copied().unwrap_or(q1).min(q1);
+        let whisker_high = s.iter().rev().find(inside).copied().unwrap_or(q3).max(q3);
+        Ok(BoxStats {
+            q1,
+            median,
+            q3,
+            whisker_low,
+            whisker_high,
+            outliers: s
+                .iter()
+                .copied()
+                .filter(|v| *v < lo_fence || *v > hi_fence)
+                .collect(),
+            count: s.len(),
+            mean: s.iter().sum::<f64>() / s.len() as f64,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tukey_numbers_of_a_known_sample() {
+        // 1..=9 plus 100: q1 = 3.25, median 5.5, q3 = 7.75 (type 7), IQR 4.5, fences
+        // −3.5 and 14.5, so the upper whisker stops at 9 and 100 is an outlier.
+        let x: Vec<f64> = (1..=9).map(f64::from).chain([100.0]).collect();
+        let b = BoxStats::new(&x).unwrap();
+        assert_eq!((b.q1, b.median, b.q3), (3.25, 5.5, 7.75));
+        assert_eq!((b.whisker_low, b.whisker_high), (1.0, 9.0));
+        assert_eq!(b.outliers, vec![100.0]);
+        assert_eq!(b.count, 10);
+        assert_eq!(b.mean, 14.5);
+        assert!(BoxStats::new(&[]).is_err());
+        let e = BoxStats::new(&[1.0, f64::NAN]).unwrap_err().to_string();
+        assert!(e.contains("box-plot values") && e.contains('1'), "{e}");
+    }
 
     #[test]
     fn rmse_matches_the_definition() {

@@ -2,9 +2,8 @@
 //! whiskers to the furthest value within 1.5·IQR, outliers as points) and labelled
 //! horizontal reference lines (e.g. an exact value the boxes estimate).
 //!
-//! The renderer draws the [`BoxStats`] it is given; [`BoxStats::of`] computes them from a
-//! sample for callers (Tukey's rule with type-7 quartiles, as R's `boxplot` up to the hinge
-//! definition).
+//! The renderer draws the [`BoxStats`] it is given, which pf-core's
+//! [`BoxStats::new`](pf_core::metrics::BoxStats::new) computes from a sample.
 
 use std::path::Path;
 
@@ -15,74 +14,15 @@ use super::line::RefLine;
 use super::style::{self, plot_err};
 use super::{Canvas, render_png};
 use crate::error::{Result, VizError};
+pub use pf_core::metrics::BoxStats;
 
-/// The numbers one box is drawn from.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct BoxStats {
-    /// First quartile (bottom of the box).
-    pub q1: f64,
-    /// Median (the bar inside the box).
-    pub median: f64,
-    /// Third quartile (top of the box).
-    pub q3: f64,
-    /// Lowest value ≥ q1 − 1.5·IQR (end of the lower whisker).
-    pub whisker_low: f64,
-    /// Highest value ≤ q3 + 1.5·IQR (end of the upper whisker).
-    pub whisker_high: f64,
-    /// Values beyond the whiskers, drawn as points.
-    pub outliers: Vec<f64>,
-    /// Sample size.
-    pub count: usize,
-    /// Sample mean (not drawn; kept for tables).
-    pub mean: f64,
-}
-
-impl BoxStats {
-    /// Tukey box-plot numbers of `x` (quartiles by linear interpolation, type 7); `None` if
-    /// `x` is empty or holds a non-finite value.
-    pub fn of(x: &[f64]) -> Option<Self> {
-        if x.is_empty() || x.iter().any(|v| !v.is_finite()) {
-            return None;
-        }
-        let mut s = x.to_vec();
-        s.sort_by(f64::total_cmp);
-        let q = |p: f64| {
-            let h = p * (s.len() - 1) as f64;
-            let lo = h.floor() as usize;
-            let hi = h.ceil() as usize;
-            s[lo] + (h - lo as f64) * (s[hi] - s[lo])
-        };
-        let (q1, median, q3) = (q(0.25), q(0.5), q(0.75));
-        let iqr = q3 - q1;
-        let (lo_fence, hi_fence) = (q1 - 1.5 * iqr, q3 + 1.5 * iqr);
-        let inside = |v: &&f64| **v >= lo_fence && **v <= hi_fence;
-        // With few values the nearest value inside a fence can lie inside the box (an
-        // interpolated quartile sits between an outlier and it): the whisker then has length 0.
-        let whisker_low = s.iter().find(inside).copied().unwrap_or(q1).min(q1);
-        let whisker_high = s.iter().rev().find(inside).copied().unwrap_or(q3).max(q3);
-        Some(BoxStats {
-            q1,
-            median,
-            q3,
-            whisker_low,
-            whisker_high,
-            outliers: s
-                .iter()
-                .copied()
-                .filter(|v| *v < lo_fence || *v > hi_fence)
-                .collect(),
-            count: s.len(),
-            mean: s.iter().sum::<f64>() / s.len() as f64,
+/// The extent of a box's whiskers and outliers.
+fn box_range(b: &BoxStats) -> (f64, f64) {
+    b.outliers
+        .iter()
+        .fold((b.whisker_low, b.whisker_high), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
         })
-    }
-
-    fn range(&self) -> (f64, f64) {
-        self.outliers
-            .iter()
-            .fold((self.whisker_low, self.whisker_high), |(lo, hi), &v| {
-                (lo.min(v), hi.max(v))
-            })
-    }
 }
 
 /// One box and its label on the x-axis.
@@ -178,7 +118,7 @@ fn draw_panel(area: &Canvas<'_>, path: &Path, p: &BoxPanel) -> Result<()> {
     let (lo, hi) = p
         .groups
         .iter()
-        .map(|g| g.stats.range())
+        .map(|g| box_range(&g.stats))
         .chain(p.ref_lines.iter().map(|r| (r.y, r.y)))
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (c, d)| {
             (a.min(c), b.max(d))
@@ -292,24 +232,10 @@ mod tests {
     use super::*;
 
     #[test]
-    fn tukey_numbers_of_a_known_sample() {
-        // 1..=9 plus 100: q1 = 3.25, median 5.5, q3 = 7.75 (type 7), IQR 4.5, fences
-        // −3.5 and 14.5, so the upper whisker stops at 9 and 100 is an outlier.
-        let x: Vec<f64> = (1..=9).map(f64::from).chain([100.0]).collect();
-        let b = BoxStats::of(&x).unwrap();
-        assert_eq!((b.q1, b.median, b.q3), (3.25, 5.5, 7.75));
-        assert_eq!((b.whisker_low, b.whisker_high), (1.0, 9.0));
-        assert_eq!(b.outliers, vec![100.0]);
-        assert_eq!(b.count, 10);
-        assert!(BoxStats::of(&[]).is_none());
-        assert!(BoxStats::of(&[1.0, f64::NAN]).is_none());
-    }
-
-    #[test]
     fn renders_a_png_and_rejects_bad_data() {
         let group = |label: &str, shift: f64| BoxGroup {
             label: label.into(),
-            stats: BoxStats::of(
+            stats: BoxStats::new(
                 &(0..50)
                     .map(|i| shift + f64::from(i).sin())
                     .chain([shift + 5.0])

@@ -347,14 +347,14 @@ fn update_boxes(
         let groups = groups
             .iter()
             .map(|(label, s)| {
-                BoxStats::of(pick(s))
+                BoxStats::new(pick(s))
                     .map(|stats| BoxGroup {
                         label: label.clone(),
                         stats,
                     })
-                    .ok_or_else(|| VizError::PlotData {
+                    .map_err(|e| VizError::PlotData {
                         what: "smooth box plot",
-                        message: format!("{label}: no finite values of {name}"),
+                        message: format!("{label}, {name}: {e}"),
                     })
             })
             .collect::<Result<Vec<_>>>()?;
