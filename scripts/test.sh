@@ -26,6 +26,15 @@ fi
 export PF_RERUN="$venv/bin/rerun"
 "$PF_RERUN" --version >&2
 
+# pf-core's AVX-512 kernels are tested against the portable ones only on a CPU that runs
+# them; elsewhere those tests return early, so say which case this run is.
+if [ -r /proc/cpuinfo ] && grep -q -w avx512f /proc/cpuinfo && grep -q -w avx512dq /proc/cpuinfo \
+  && grep -q -w avx512bw /proc/cpuinfo && grep -q -w avx512vl /proc/cpuinfo; then
+  echo "scripts/test.sh: this CPU has AVX-512: pf-core's AVX-512 kernels are tested" >&2
+else
+  echo "scripts/test.sh: this CPU lacks AVX-512 (or it cannot tell): pf-core's AVX-512 kernels are NOT tested by this run" >&2
+fi
+
 # The tests that need the Rerun CLI are #[ignore]d by a plain `cargo test`; here they run
 # with the rest, in one pass, so the quick report they check is rendered once.
 cargo test --workspace -- --include-ignored

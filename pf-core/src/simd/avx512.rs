@@ -82,6 +82,17 @@ impl Avx512 {
         }
     }
 
+    /// The token for a test of a twin, or `None` on a CPU without AVX-512, where the test can
+    /// only return early. `scripts/test.sh` says in its log whether the twins' tests ran.
+    #[cfg(test)]
+    pub(crate) fn for_test() -> Option<Self> {
+        let cpu = Self::get(Simd::Auto);
+        if cpu.is_none() {
+            eprintln!("this CPU lacks AVX-512: the AVX-512 twin is not tested");
+        }
+        cpu
+    }
+
     /// `l[k] ← exp(l[k] − shift)` for weights with `l[k] ≤ shift`: the batch filter's
     /// weights relative to its chunk maximum, by the twin of
     /// [`exp_fma_nonpositive`](super::math::exp_fma_nonpositive) (the same bits).
@@ -428,8 +439,8 @@ pub(crate) mod x86 {
         use super::super::Avx512;
         use super::*;
         use crate::mc::stream_rng;
+        use crate::simd::LaneRng;
         use crate::simd::math::{exp_fma, unit_from_bits};
-        use crate::simd::{LaneRng, Simd};
 
         /// The twins' `exp` of each value.
         #[target_feature(enable = "avx2,fma,avx512f,avx512dq,avx512bw,avx512vl")]
@@ -458,7 +469,7 @@ pub(crate) mod x86 {
         /// beyond (0 below −708, also for −∞), on lengths that end inside a register.
         #[test]
         fn exp_fma_nonpositive_twin_matches() {
-            let Some(cpu) = Avx512::get(Simd::Auto) else {
+            let Some(cpu) = Avx512::for_test() else {
                 return;
             };
             for len in [1usize, 8, 13, 64, 1000] {
@@ -485,7 +496,7 @@ pub(crate) mod x86 {
         /// through one that is not, on lengths that end inside a register.
         #[test]
         fn ceil_boundaries_match_the_portable_index() {
-            let Some(cpu) = Avx512::get(Simd::Auto) else {
+            let Some(cpu) = Avx512::for_test() else {
                 return;
             };
             let cw: Vec<f64> = (-20..140)
@@ -538,7 +549,7 @@ pub(crate) mod x86 {
                     _ => i as f64 * std::f64::consts::LN_2 / 16.0 % 700.0,
                 })
                 .collect();
-            let Some(_) = Avx512::get(Simd::Auto) else {
+            let Some(_) = Avx512::for_test() else {
                 return;
             };
             // SAFETY: the token exists only where the CPU has the features.

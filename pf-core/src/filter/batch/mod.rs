@@ -1132,7 +1132,7 @@ mod tests {
     /// or in the remainder, with `−∞`, both zeros, and a NaN or `+∞` anywhere.
     #[test]
     fn the_maximum_twin_matches_the_portable_loop() {
-        let Some(cpu) = Avx512::get(Simd::Auto) else {
+        let Some(cpu) = Avx512::for_test() else {
             return;
         };
         let mut rng = stream_rng(5, 0);

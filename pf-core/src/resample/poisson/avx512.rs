@@ -520,7 +520,6 @@ mod x86 {
         use super::*;
         use crate::mc::stream_rng;
         use crate::resample::poisson::poisson_block;
-        use crate::simd::Simd;
         use crate::simd::avx512::Avx512;
         use crate::simd::math::exp_fma;
         use rand::RngExt;
@@ -593,7 +592,7 @@ mod x86 {
         /// margin assumes 10⁻⁶ with the rounding of the rate.
         #[test]
         fn exp16_is_accurate_on_the_rates() {
-            let Some(_) = Avx512::get(Simd::Auto) else {
+            let Some(_) = Avx512::for_test() else {
                 return;
             };
             let mut xs: Vec<f32> = (0..12.0f32.to_bits())
@@ -623,7 +622,7 @@ mod x86 {
         /// budget with the products' 1.8·10⁻⁷ within half the margin.
         #[test]
         fn the_error_budget_holds() {
-            let Some(_) = Avx512::get(Simd::Auto) else {
+            let Some(_) = Avx512::for_test() else {
                 return;
             };
             let ulp = f64::from(ULP_U);
@@ -705,7 +704,7 @@ mod x86 {
         /// compared up front and with four.
         #[test]
         fn certified_counts_equal_the_portable_inversion() {
-            let Some(_) = Avx512::get(Simd::Auto) else {
+            let Some(_) = Avx512::for_test() else {
                 return;
             };
             let (lam, bits) = hard_lanes(5, 64 * 400);
