@@ -14,6 +14,7 @@ use pf_core::filter::{BatchBootstrap, BatchConfig, ResamplePolicy};
 use pf_core::limits::check_count;
 use pf_core::mc::{Par, stream_rng};
 use pf_core::models::NoisyAr1;
+use pf_core::simd::Simd;
 use serde::{Deserialize, Serialize};
 
 use pf_core::filter::{FilterConfig, ParticleFilter};
@@ -45,6 +46,10 @@ pub struct BenchResult {
     pub repeat: usize,
     /// The median of the runs' seconds (the upper of the middle two for an even `repeat`).
     pub seconds_median: f64,
+    /// The copy of pf-core's kernels that ran (`--simd` on this CPU): `avx512`, `avx2` or
+    /// `portable`.
+    #[serde(default)]
+    pub kernels: String,
 }
 
 /// Run the benchmark.
@@ -96,6 +101,7 @@ pub fn bootstrap(args: &BenchBootstrapArgs) -> Result<BenchResult> {
     let cfg = BatchConfig {
         resampler: args.resampler,
         policy: ResamplePolicy::Always,
+        simd: args.simd,
         par: if args.threads == 1 {
             Par::Seq
         } else {
@@ -112,17 +118,19 @@ pub fn bootstrap(args: &BenchBootstrapArgs) -> Result<BenchResult> {
             .map_err(VizError::core("bench"))
     })?;
     Ok(BenchResult::new(
-        args.particles,
-        steps,
-        args.threads,
-        args.repeat,
+        (args.particles, steps, args.threads),
+        (args.repeat, args.simd),
         &runs,
     ))
 }
 
 impl BenchResult {
     /// The result of `repeat` timed runs of `particles` particles over `steps` steps.
-    fn new(particles: usize, steps: usize, threads: usize, repeat: usize, runs: &Runs) -> Self {
+    fn new(
+        (particles, steps, threads): (usize, usize, usize),
+        (repeat, simd): (usize, Simd),
+        runs: &Runs,
+    ) -> Self {
         BenchResult {
             particles,
             steps,
@@ -132,6 +140,7 @@ impl BenchResult {
             loglik: runs.loglik,
             repeat,
             seconds_median: runs.seconds_median,
+            kernels: simd.kernels().into(),
         }
     }
 }
@@ -203,7 +212,11 @@ pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
         return Err(invalid("--steps must be at least 1".into()));
     }
     let result = |steps: usize, runs: &Runs| {
-        BenchResult::new(args.particles, steps, args.threads, args.repeat, runs)
+        BenchResult::new(
+            (args.particles, steps, args.threads),
+            (args.repeat, args.simd),
+            runs,
+        )
     };
     let (name, run) = match args.model {
         BenchModel::Ar1 => {
@@ -215,6 +228,7 @@ pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
                 resampler: pf_core::resample::Resampler::Systematic,
                 seed: args.seed,
                 repeat: args.repeat,
+                simd: args.simd,
                 json: args.json,
             };
             ("ar1", bootstrap(&ar1)?)
@@ -245,6 +259,7 @@ pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
                 None => RadarBench::new(args.particles, args.steps.unwrap_or(100), args.seed)
                     .map_err(mpf)?,
             };
+            bench.set_simd(args.simd);
             let steps = bench.observations().len();
             let runs = time_runs(args.threads, args.repeat, || bench.run().map_err(mpf))?;
             ("radar", result(steps, &runs))
@@ -259,6 +274,7 @@ pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
             let hom = VizError::paper("bench filter bearings");
             let steps = args.steps.unwrap_or(40);
             let mut bench = BearingsBench::new(args.particles, steps, args.seed).map_err(hom)?;
+            bench.set_simd(args.simd);
             let runs = time_runs(args.threads, args.repeat, || bench.run().map_err(hom))?;
             ("bearings", result(steps, &runs))
         }

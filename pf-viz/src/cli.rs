@@ -118,6 +118,11 @@ pub struct BenchFilterArgs {
     /// `seconds` is the fastest.
     #[arg(long, value_name = "R", default_value_t = 1)]
     pub repeat: usize,
+    /// Which compiled kernels run: `auto` (the widest this CPU runs: AVX-512, else AVX2 with
+    /// FMA, else portable), at most `avx2`, or `portable`, to see what a CPU without the
+    /// wider ones pays. The estimate is the same bits; the JSON's `kernels` says which ran.
+    #[arg(long, value_name = "KERNELS", default_value_t = pf_core::simd::Simd::Auto)]
+    pub simd: pf_core::simd::Simd,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
@@ -165,6 +170,11 @@ pub struct BenchBootstrapArgs {
     /// `seconds` is the fastest, which is the least disturbed by other work on the machine.
     #[arg(long, value_name = "R", default_value_t = 1)]
     pub repeat: usize,
+    /// Which compiled kernels run: `auto` (the widest this CPU runs: AVX-512, else AVX2 with
+    /// FMA, else portable), at most `avx2`, or `portable`, to see what a CPU without the
+    /// wider ones pays. The estimate is the same bits; the JSON's `kernels` says which ran.
+    #[arg(long, value_name = "KERNELS", default_value_t = pf_core::simd::Simd::Auto)]
+    pub simd: pf_core::simd::Simd,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,

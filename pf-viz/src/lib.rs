@@ -70,8 +70,14 @@ pub fn run(cli: Cli) -> Result<()> {
                     String::new()
                 };
                 print_line(format_args!(
-                    "bootstrap AR(1): N = {}, n = {}, {} thread(s): {:.3} s{runs}, {:.2} ns per particle-step, log-likelihood {:.3}",
-                    r.particles, r.steps, r.threads, r.seconds, r.ns_per_particle_step, r.loglik
+                    "bootstrap AR(1): N = {}, n = {}, {} thread(s), {} kernels: {:.3} s{runs}, {:.2} ns per particle-step, log-likelihood {:.3}",
+                    r.particles,
+                    r.steps,
+                    r.threads,
+                    r.kernels,
+                    r.seconds,
+                    r.ns_per_particle_step,
+                    r.loglik
                 ))?;
             }
             Ok(())
@@ -82,11 +88,12 @@ pub fn run(cli: Cli) -> Result<()> {
                 cmd::print_json(&r)?;
             } else {
                 print_line(format_args!(
-                    "{} filter: N = {}, {} steps, {} thread(s): {:.3} s (fastest of {}; median {:.3} s), {:.2} ns per particle-step, log-likelihood {:.3}",
+                    "{} filter: N = {}, {} steps, {} thread(s), {} kernels: {:.3} s (fastest of {}; median {:.3} s), {:.2} ns per particle-step, log-likelihood {:.3}",
                     r.model,
                     r.run.particles,
                     r.run.steps,
                     r.run.threads,
+                    r.run.kernels,
                     r.run.seconds,
                     r.run.repeat,
                     r.run.seconds_median,

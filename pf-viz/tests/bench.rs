@@ -100,6 +100,7 @@ fn bench_bootstrap_keeps_its_json_contract() {
             "seconds",
             "ns_per_particle_step",
             "loglik",
+            "kernels",
         ] {
             assert!(v.get(key).is_some(), "missing {key}");
         }
@@ -276,6 +277,7 @@ fn bench_filter_keeps_its_json_contract_for_every_model() {
             "seconds",
             "ns_per_particle_step",
             "loglik",
+            "kernels",
         ] {
             assert!(one.get(key).is_some(), "{model}: missing {key}");
         }
@@ -303,4 +305,54 @@ fn bench_filter_keeps_its_json_contract_for_every_model() {
     ]);
     one_line_error(&o, "bench filter N = 0", &["--particles"]);
     assert!(o.stdout.is_empty());
+}
+
+/// `--simd` chooses which compiled copy of pf-core's kernels runs, never the estimate: every
+/// model gives the same log-likelihood, bit for bit, on the portable, AVX2 and widest
+/// copies, and the JSON's `kernels` names the copy that ran (`portable` when asked for).
+#[test]
+fn bench_kernel_copies_give_the_same_estimate() {
+    for (model, steps) in [("ar1", "20"), ("radar", "10"), ("bearings", "6")] {
+        let run = |simd: &str| {
+            let o = pf_viz_ok(&[
+                "bench",
+                "filter",
+                "--model",
+                model,
+                "--particles",
+                "3000",
+                "--steps",
+                steps,
+                "--simd",
+                simd,
+                "--json",
+            ]);
+            serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()
+        };
+        let (auto, avx2, portable) = (run("auto"), run("avx2"), run("portable"));
+        assert_eq!(portable["kernels"], "portable", "{model}");
+        assert!(
+            ["avx512", "avx2", "portable"].contains(&auto["kernels"].as_str().unwrap()),
+            "{model}: {}",
+            auto["kernels"]
+        );
+        assert_ne!(
+            avx2["kernels"], "avx512",
+            "{model}: --simd avx2 caps the copy"
+        );
+        let bits = |v: &serde_json::Value| v["loglik"].as_f64().unwrap().to_bits();
+        assert_eq!(
+            bits(&auto),
+            bits(&portable),
+            "{model}: widest against portable"
+        );
+        assert_eq!(
+            bits(&avx2),
+            bits(&portable),
+            "{model}: AVX2 against portable"
+        );
+    }
+    let o = pf_viz(&["bench", "bootstrap", "--simd", "sse9", "--json"]);
+    assert!(o.stdout.is_empty());
+    one_line_error(&o, "--simd sse9", &["sse9", "auto, avx2 or portable"]);
 }

@@ -42,6 +42,49 @@ pub enum Simd {
     Portable,
 }
 
+impl Simd {
+    /// Every option, for the command line and tests.
+    pub const ALL: [Simd; 3] = [Simd::Auto, Simd::Avx2, Simd::Portable];
+
+    /// The lower-case name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Simd::Auto => "auto",
+            Simd::Avx2 => "avx2",
+            Simd::Portable => "portable",
+        }
+    }
+
+    /// The copy of the kernels that runs on this CPU under this option: `"avx512"`, `"avx2"`
+    /// or `"portable"` (what a benchmark reports beside its time).
+    pub fn kernels(self) -> &'static str {
+        if avx512::Avx512::get(self).is_some() {
+            return "avx512";
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self != Simd::Portable
+            && std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("fma")
+        {
+            return "avx2";
+        }
+        "portable"
+    }
+}
+
+impl std::str::FromStr for Simd {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        crate::names::parse_name("kernel set", &Simd::ALL, Simd::name, s)
+    }
+}
+
+impl std::fmt::Display for Simd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The positions of the set bits of `mask`, lowest first: the lanes a vectorised pass
 /// marked for scalar work.
 #[inline(always)]

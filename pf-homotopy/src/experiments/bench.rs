@@ -39,6 +39,11 @@ impl BearingsBench {
         Ok(BearingsBench { filter, ys })
     }
 
+    /// Run pf-core's `simd` copy of the kernels (the same estimate, at that copy's speed).
+    pub fn set_simd(&mut self, simd: pf_core::simd::Simd) {
+        self.filter.set_simd(simd);
+    }
+
     /// A full run from the start (chunks on the caller's rayon pool); the log-likelihood
     /// estimate `log p̂(y_2, …, y_K | y_1)`.
     ///

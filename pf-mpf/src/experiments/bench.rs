@@ -68,6 +68,11 @@ impl RadarBench {
         Ok(Self { filter, ys })
     }
 
+    /// Run pf-core's `simd` copy of the kernels (the same estimate, at that copy's speed).
+    pub fn set_simd(&mut self, simd: pf_core::simd::Simd) {
+        self.filter.set_simd(simd);
+    }
+
     /// The observations.
     pub fn observations(&self) -> &[Option<RadarObs>] {
         &self.ys

@@ -293,6 +293,12 @@ impl<M: BatchModel, Q: BatchMutation<M>> BatchFilter<M, Q> {
         self.last = None;
     }
 
+    /// Run the kernels of `simd` from the next step on: the same bits, at that copy's speed
+    /// (for benchmarks of a CPU without AVX-512 or AVX2 on one that has them).
+    pub fn set_simd(&mut self, simd: Simd) {
+        self.cfg.simd = simd;
+    }
+
     /// The model.
     pub fn model(&self) -> &M {
         &self.model
