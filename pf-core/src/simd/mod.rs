@@ -183,3 +183,29 @@ mod avx2 {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The command line's names round-trip, a bad one lists them all, and the portable
+    /// option always runs the portable copy while `avx2` never runs the AVX-512 twins.
+    #[test]
+    fn names_round_trip_and_options_cap_the_kernels() {
+        for s in Simd::ALL {
+            assert_eq!(s.to_string().parse::<Simd>(), Ok(s));
+        }
+        let e = "sse9".parse::<Simd>().unwrap_err();
+        assert!(
+            e.contains("sse9") && e.contains("auto, avx2 or portable"),
+            "{e}"
+        );
+        assert_eq!(Simd::Portable.kernels(), "portable");
+        assert_ne!(Simd::Avx2.kernels(), "avx512");
+        let widest = Simd::Auto.kernels();
+        assert_eq!(
+            widest == "avx512",
+            avx512::Avx512::get(Simd::Auto).is_some()
+        );
+    }
+}
