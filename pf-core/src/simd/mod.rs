@@ -16,6 +16,7 @@
 //! results** (tested); the wider ones only make them faster. [`Simd::Avx2`] and
 //! [`Simd::Portable`] cap the instruction set, for comparison and audits.
 
+pub(crate) mod avx2;
 pub(crate) mod avx512;
 mod lanes;
 pub mod math;
@@ -158,30 +159,6 @@ pub(crate) fn dispatch<R>(simd: Simd, f: impl FnOnce() -> R) -> R {
 #[inline]
 pub fn vectorised<R>(f: impl FnOnce() -> R) -> R {
     dispatch(Simd::Auto, f)
-}
-
-#[cfg(target_arch = "x86_64")]
-mod avx2 {
-    /// `f` compiled with AVX2 and FMA enabled.
-    #[target_feature(enable = "avx2,fma")]
-    fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
-        f()
-    }
-
-    /// Call the AVX2 copy only on a CPU that has AVX2 and FMA.
-    #[allow(unsafe_code)]
-    #[inline]
-    pub(super) fn run<R>(f: impl FnOnce() -> R) -> R {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: `with_avx2` is safe to call on any CPU that supports AVX2 and FMA, and
-            // the run-time checks just above established that this one does. The detection
-            // result is cached by std, so each check costs one atomic load.
-            unsafe { with_avx2(f) }
-        } else {
-            f()
-        }
-    }
 }
 
 #[cfg(test)]

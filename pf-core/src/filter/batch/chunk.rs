@@ -5,6 +5,7 @@ use super::model::{BatchModel, Cols, ColsMut};
 use super::mutation::BatchMutation;
 use crate::buffer::Line;
 use crate::resample::{SCAN, prefix4_each, stratified_index_in};
+use crate::simd::avx2::Avx2;
 use crate::simd::avx512::Avx512;
 use crate::simd::math::{
     ChunkMap, ceil_index_in, exp_fma_nonpositive, exp_fma_nonpositive_lanes, max_and_flag,
@@ -138,6 +139,9 @@ pub(super) struct StepCtx<'a, M: BatchModel, Q> {
     pub(super) per_group: usize,
     /// The AVX-512 twins, where the configuration allows them and the CPU has AVX-512.
     pub(super) avx512: Option<Avx512>,
+    /// The AVX2 twin of the normals, where the configuration allows it and the CPU has AVX2
+    /// and FMA (used only without AVX-512).
+    pub(super) avx2: Option<Avx2>,
 }
 
 impl<M: BatchModel, Q> StepCtx<'_, M, Q> {
@@ -180,9 +184,10 @@ pub(super) fn chunk_step<M: BatchModel, Q: BatchMutation<M>>(
     let lo = d * ctx.c;
     let (model, t, dim, c) = (ctx.model, ctx.t, ctx.dim, ctx.c);
     let z = &mut Line::f64s(&mut s.z)[..ctx.noise * len];
-    match ctx.avx512 {
-        Some(cpu) => cpu.fill_normal(rng, z),
-        None => rng.fill_normal_inline(z),
+    match (ctx.avx512, ctx.avx2) {
+        (Some(cpu), _) => cpu.fill_normal(rng, z),
+        (None, Some(cpu)) => cpu.fill_normal(rng, z),
+        (None, None) => rng.fill_normal_inline(z),
     }
     let z = Cols::strided(z, ctx.noise, len, len);
     let mut x = ColsMut::strided(xs, dim, len, c);

@@ -52,6 +52,7 @@ use crate::params::ParamError;
 use crate::resample::{
     BLOCK, BlockPlan, Blocked, ChunkSplit, ChunkedWeights, Resampler, chunks_per_block,
 };
+use crate::simd::avx2::Avx2;
 use crate::simd::avx512::Avx512;
 use crate::simd::{LaneRng, Simd, dispatch};
 use chunk::{ChunkStat, Scratch, Source, StepCtx, WalkHint, chunk_step};
@@ -454,6 +455,7 @@ impl<M: BatchModel, Q: BatchMutation<M>> BatchFilter<M, Q> {
             prefetch: n >= self.prefetch_min,
             per_group,
             avx512: Avx512::get(self.cfg.simd),
+            avx2: Avx2::get(self.cfg.simd),
         };
         let simd = self.cfg.simd;
         type GroupWork<'a> = (
@@ -954,6 +956,7 @@ mod tests {
                     prefetch: false,
                     per_group: 1,
                     avx512: None,
+                    avx2: None,
                 };
                 // G_j N/T, from the global cumulative weights.
                 let pos: Vec<f64> = (0..n).map(|j| ctx.chunk_map(j / chunk).x(cw[j])).collect();
