@@ -123,17 +123,30 @@ impl LaneRng {
 
     /// [`fill_normal`](Self::fill_normal) on the chosen kernel (the numbers are the same).
     pub fn fill_normal_with(&mut self, simd: Simd, out: &mut [f64]) {
-        if let Some(cpu) = Avx512::get(simd) {
-            return cpu.fill_normal(self, out);
+        match (Avx512::get(simd), Avx2::get(simd)) {
+            (None, None) => dispatch(
+                simd,
+                #[inline(always)]
+                || self.fill_normal_inline(out),
+            ),
+            twins => self.fill_normal_on(twins, out),
         }
-        if let Some(cpu) = Avx2::get(simd) {
-            return cpu.fill_normal(self, out);
+    }
+
+    /// The normals on the widest twin the tokens allow (AVX-512, else AVX2), or without
+    /// either on the copy the caller is compiled in: for callers already inside a
+    /// dispatched kernel, which hold the tokens.
+    #[inline(always)]
+    pub(crate) fn fill_normal_on(
+        &mut self,
+        twins: (Option<Avx512>, Option<Avx2>),
+        out: &mut [f64],
+    ) {
+        match twins {
+            (Some(cpu), _) => cpu.fill_normal(self, out),
+            (None, Some(cpu)) => cpu.fill_normal(self, out),
+            (None, None) => self.fill_normal_inline(out),
         }
-        dispatch(
-            simd,
-            #[inline(always)]
-            || self.fill_normal_inline(out),
-        );
     }
 
     /// Fill `out` with independent unit exponentials (vectorised ziggurat).

@@ -60,16 +60,12 @@ impl Simd {
     /// or `"portable"` (what a benchmark reports beside its time).
     pub fn kernels(self) -> &'static str {
         if avx512::Avx512::get(self).is_some() {
-            return "avx512";
+            "avx512"
+        } else if avx2::Avx2::get(self).is_some() {
+            "avx2"
+        } else {
+            "portable"
         }
-        #[cfg(target_arch = "x86_64")]
-        if self != Simd::Portable
-            && std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma")
-        {
-            return "avx2";
-        }
-        "portable"
     }
 }
 

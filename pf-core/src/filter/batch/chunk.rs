@@ -184,11 +184,7 @@ pub(super) fn chunk_step<M: BatchModel, Q: BatchMutation<M>>(
     let lo = d * ctx.c;
     let (model, t, dim, c) = (ctx.model, ctx.t, ctx.dim, ctx.c);
     let z = &mut Line::f64s(&mut s.z)[..ctx.noise * len];
-    match (ctx.avx512, ctx.avx2) {
-        (Some(cpu), _) => cpu.fill_normal(rng, z),
-        (None, Some(cpu)) => cpu.fill_normal(rng, z),
-        (None, None) => rng.fill_normal_inline(z),
-    }
+    rng.fill_normal_on((ctx.avx512, ctx.avx2), z);
     let z = Cols::strided(z, ctx.noise, len, len);
     let mut x = ColsMut::strided(xs, dim, len, c);
     // The prior log-weight: the previous one without resampling, uniform after it.
