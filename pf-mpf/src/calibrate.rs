@@ -49,9 +49,10 @@ fn thread_cpu_ns() -> Option<f64> {
 }
 
 /// A stopwatch on the calling thread's CPU time where the platform has that clock (Linux,
-/// macOS, Windows, the BSDs), on wall time otherwise ([`Stopwatch::clock`] says which). CPU time leaves out the time
-/// the thread waits for a core, which on a shared machine is most of the noise; it also
-/// leaves out work done on other threads, so time single-threaded code with it.
+/// macOS, Windows, the BSDs), on wall time otherwise ([`Stopwatch::clock`] says which). CPU
+/// time leaves out the time the thread waits for a core, which on a shared machine is most
+/// of the noise; it also leaves out work done on other threads, so time single-threaded
+/// code with it.
 #[derive(Debug, Clone, Copy)]
 pub struct Stopwatch {
     cpu_start: Option<f64>,

@@ -118,17 +118,24 @@ pub fn bootstrap(args: &BenchBootstrapArgs) -> Result<BenchResult> {
             .map_err(VizError::core("bench"))
     })?;
     Ok(BenchResult::new(
-        (args.particles, steps, args.threads),
-        (args.repeat, args.simd),
+        args.particles,
+        steps,
+        args.threads,
+        args.repeat,
+        args.simd,
         &runs,
     ))
 }
 
 impl BenchResult {
-    /// The result of `repeat` timed runs of `particles` particles over `steps` steps.
+    /// The result of `repeat` timed runs of `particles` particles over `steps` steps on the
+    /// kernels of `simd`.
     fn new(
-        (particles, steps, threads): (usize, usize, usize),
-        (repeat, simd): (usize, Simd),
+        particles: usize,
+        steps: usize,
+        threads: usize,
+        repeat: usize,
+        simd: Simd,
         runs: &Runs,
     ) -> Self {
         BenchResult {
@@ -213,8 +220,11 @@ pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
     }
     let result = |steps: usize, runs: &Runs| {
         BenchResult::new(
-            (args.particles, steps, args.threads),
-            (args.repeat, args.simd),
+            args.particles,
+            steps,
+            args.threads,
+            args.repeat,
+            args.simd,
             runs,
         )
     };

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{Scratch, one_line_error, pf_viz, pf_viz_ok};
+use common::{Scratch, one_line_error, pf_viz, pf_viz_json, pf_viz_ok};
 
 #[test]
 fn bad_bench_arguments_exit_non_zero_with_nothing_on_stdout() {
@@ -314,7 +314,7 @@ fn bench_filter_keeps_its_json_contract_for_every_model() {
 fn bench_kernel_copies_give_the_same_estimate() {
     for (model, steps) in [("ar1", "20"), ("radar", "10"), ("bearings", "6")] {
         let run = |simd: &str| {
-            let o = pf_viz_ok(&[
+            pf_viz_json(&[
                 "bench",
                 "filter",
                 "--model",
@@ -326,8 +326,7 @@ fn bench_kernel_copies_give_the_same_estimate() {
                 "--simd",
                 simd,
                 "--json",
-            ]);
-            serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()
+            ])
         };
         let (auto, avx2, portable) = (run("auto"), run("avx2"), run("portable"));
         assert_eq!(portable["kernels"], "portable", "{model}");
