@@ -198,7 +198,7 @@ impl<R: BufRead> CsvSamples<R> {
                 return Err(csv_err(
                     line,
                     format!(
-                        "{name} = {x} is negative: volumes, masses, flows and densities cannot be"
+                        "{name} = `{f}` is negative: volumes, masses, flows and densities cannot be"
                     ),
                 ));
             }
@@ -373,12 +373,12 @@ mod tests {
         );
         let e = err(&format!("{h}0,1,2,3,4\n5,1,2,-3,4\n"));
         assert!(
-            e.contains("line 3") && e.contains("Q_i = -3 is negative"),
+            e.contains("line 3") && e.contains("Q_i = `-3` is negative"),
             "{e}"
         );
         let e = err(&format!("{h}0,1,2,3,-4\n"));
         assert!(
-            e.contains("line 2") && e.contains("rho_i = -4 is negative"),
+            e.contains("line 2") && e.contains("rho_i = `-4` is negative"),
             "{e}"
         );
         let e = err(h);

@@ -31,6 +31,16 @@ pub enum HomotopyError {
         /// Minimum number.
         needed: usize,
     },
+    /// A sampling instant outside the scenario.
+    #[error(
+        "sampling instant K = {k} is outside 2..={n_samples}: the scenario has {n_samples} samples, and instant 1 only initialises"
+    )]
+    InstantOutOfRange {
+        /// The instant asked for.
+        k: usize,
+        /// The scenario's number of samples.
+        n_samples: usize,
+    },
     /// Two sequences that must have the same length do not.
     #[error("length mismatch: {what}: expected {expected}, got {got}")]
     LengthMismatch {

@@ -203,7 +203,10 @@ fn invalid_inputs_are_errors_not_panics() {
     };
     assert!(matches!(
         pf_homotopy::experiments::ellipses(&cfg),
-        Err(HomotopyError::Param(_))
+        Err(HomotopyError::InstantOutOfRange {
+            k: 99,
+            n_samples: 40
+        })
     ));
     // Sizes no machine holds are errors before anything is allocated or run: the λ grid,
     // the polar grid, the number of instants.

@@ -171,6 +171,7 @@ impl CalibrateConfig {
         }
         params::at_least_one("reps", self.reps)?;
         params::at_least_one("rounds", self.rounds)?;
+        pf_core::limits::check_count("rounds", self.rounds)?;
         Ok(())
     }
 }
@@ -739,7 +740,8 @@ fn calls_per_block(f: &mut dyn FnMut()) -> usize {
 fn interleaved(reps: usize, rounds: usize, jobs: &mut [Box<dyn FnMut() + '_>]) -> Vec<Vec<f64>> {
     let inner: Vec<usize> = jobs.iter_mut().map(|f| calls_per_block(f)).collect();
     let m = jobs.len();
-    let mut out = vec![Vec::with_capacity(rounds); m];
+    // Grown round by round, so a huge `rounds` is never asked for up front.
+    let mut out = vec![Vec::new(); m];
     for r in 0..rounds {
         for j in (0..m).map(|j| (j + r) % m) {
             let t = (0..reps)

@@ -24,7 +24,7 @@ use pf_homotopy::experiments::bench::BearingsBench;
 use pf_mpf::experiments::bench::RadarBench;
 
 use crate::cli::{BenchBootstrapArgs, BenchFilterArgs, BenchGenealogyArgs, BenchModel};
-use crate::data::read_y;
+use crate::data::{read_radar, read_y};
 use crate::error::{Result, VizError};
 
 /// The JSON contract of `pf-viz bench bootstrap --json`.
@@ -172,7 +172,9 @@ fn time_runs(
         .map_err(|e| VizError::Argument {
             message: format!("cannot start {threads} threads: {e}"),
         })?;
-    let mut times = Vec::with_capacity(repeat);
+    // Grown as the runs finish: a mistyped huge `--repeat` runs until stopped, but never
+    // asks for its whole buffer up front.
+    let mut times = Vec::new();
     let mut loglik = f64::NAN;
     for _ in 0..repeat {
         let (seconds, ll) = pool.install(|| {
@@ -247,13 +249,7 @@ pub fn filter(args: &BenchFilterArgs) -> Result<FilterBenchResult> {
             let mpf = VizError::paper("bench filter radar");
             let mut bench = match &args.data {
                 Some(path) => {
-                    let text = std::fs::read_to_string(path).map_err(VizError::io(path))?;
-                    let mut ys = pf_mpf::experiments::bench::parse_observations_csv(&text)
-                        .map_err(|e| VizError::Data {
-                            path: path.clone(),
-                            line: None,
-                            message: e.to_string(),
-                        })?;
+                    let mut ys = read_radar(path)?;
                     if let Some(n) = args.steps {
                         if n > ys.len() {
                             return Err(invalid(format!(

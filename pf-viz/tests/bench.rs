@@ -208,6 +208,14 @@ fn absurd_sizes_are_one_line_errors() {
             &["more than this machine can hold"],
         );
     }
+    let args = ["mpf", "calibrate", "--quick", "--rounds", max, "--json"];
+    let o = pf_viz(&args);
+    assert_eq!(o.status.code(), Some(1));
+    one_line_error(
+        &o,
+        "calibrate --rounds",
+        &["rounds", "more than this machine can hold"],
+    );
 }
 
 /// Counts within the limit whose buffers or results exceed the machine's memory are one-line
@@ -305,6 +313,88 @@ fn bench_filter_keeps_its_json_contract_for_every_model() {
     ]);
     one_line_error(&o, "bench filter N = 0", &["--particles"]);
     assert!(o.stdout.is_empty());
+}
+
+/// `bench filter --model radar --data` reads its measurements by column name: the same rows
+/// in another layout (Windows line ends, a byte-order mark, the columns swapped, an extra
+/// column) give the same estimate, bit for bit; `,` is a missing measurement; a bad row is a
+/// one-line error naming its line, and a blank line among the rows is refused rather than
+/// skipped (which would shift every later measurement by a step).
+#[test]
+fn bench_filter_reads_radar_measurements_by_column() {
+    let dir = Scratch::new("radar-data");
+    let rows = [
+        (2503.46, 0.6443),
+        (2493.20, 0.6513),
+        (2481.53, 0.6589),
+        (2443.94, 0.6657),
+        (2431.08, 0.6721),
+    ];
+    let plain: String = std::iter::once("range,azimuth\n".to_owned())
+        .chain(rows.iter().map(|(r, a)| format!("{r},{a}\n")))
+        .collect();
+    let other: String = std::iter::once("\u{feff}note,azimuth,range\r\n".to_owned())
+        .chain(rows.iter().map(|(r, a)| format!("x,{a},{r}\r\n")))
+        .collect();
+    let loglik = |path: &str| {
+        let v = pf_viz_json(&[
+            "bench",
+            "filter",
+            "--model",
+            "radar",
+            "--data",
+            path,
+            "--particles",
+            "2000",
+            "--json",
+        ]);
+        assert_eq!(v["steps"], 5, "{path}");
+        v["loglik"].as_f64().unwrap()
+    };
+    let a = loglik(&dir.file("plain.csv", &plain));
+    let b = loglik(&dir.file("other.csv", &other));
+    assert!(a.is_finite());
+    assert_eq!(a.to_bits(), b.to_bits(), "{a} against {b}");
+    let gap = plain.replacen("2481.53,0.6589", ",", 1);
+    let c = loglik(&dir.file("gap.csv", &gap));
+    assert!(
+        c.is_finite() && c != a,
+        "a missing measurement: {c} against {a}"
+    );
+
+    for (name, text, needles) in [
+        (
+            "nan.csv",
+            plain.replacen("0.6589", "NaN", 1),
+            &[
+                "nan.csv, line 4",
+                "`azimuth` = `NaN` is not a finite number",
+            ][..],
+        ),
+        (
+            "half.csv",
+            plain.replacen("2481.53,", ",", 1),
+            &["half.csv, line 4", "both be given"][..],
+        ),
+        (
+            "blank.csv",
+            plain.replacen("2481.53", "\n2481.53", 1),
+            &["blank.csv, line 4", "blank line", "`,`"][..],
+        ),
+        (
+            "header.csv",
+            plain.replacen("range,azimuth", "r,azimuth", 1),
+            &["header.csv, line 1", "no `range` column"][..],
+        ),
+    ] {
+        let path = dir.file(name, &text);
+        let o = pf_viz(&[
+            "bench", "filter", "--model", "radar", "--data", &path, "--json",
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        assert!(o.stdout.is_empty(), "{name}");
+        one_line_error(&o, name, needles);
+    }
 }
 
 /// `--simd` chooses which compiled copy of pf-core's kernels runs, never the estimate: every

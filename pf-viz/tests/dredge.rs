@@ -256,19 +256,19 @@ fn each_bad_input_gets_a_one_line_error_naming_line_and_problem() {
         &dir,
         "neg_flow.csv",
         &format!("{h}{ok}10,1080,1.1e6,-8,1200\n"),
-        &["line 4", "Q_i = -8 is negative"],
+        &["line 4", "Q_i = `-8` is negative"],
     );
     rejects(
         &dir,
         "neg_density.csv",
         &format!("{h}{ok}10,1080,1.1e6,8,-1200\n"),
-        &["line 4", "rho_i = -1200 is negative"],
+        &["line 4", "rho_i = `-1200` is negative"],
     );
     rejects(
         &dir,
         "neg_truth.csv",
         "t,V_t,m_t,Q_i,rho_i,Q_o,rho_o\n0,1000,1.0e6,8,1200,1,-5\n",
-        &["line 2", "rho_o = -5 is negative"],
+        &["line 2", "rho_o = `-5` is negative"],
     );
     let missing = pf_viz(&["dredge", "estimate", "--data", "/nonexistent/x.csv"]);
     assert_eq!(missing.status.code(), Some(1));

@@ -80,8 +80,14 @@ fn ellipses_keep_the_contract_and_shrink_across_the_line_of_sight() {
 #[test]
 fn bad_arguments_get_one_line() {
     for (args, needle) in [
-        (&["homotopy", "ellipses", "--step", "99"][..], "step"),
-        (&["homotopy", "ellipses", "--step", "1"][..], "step"),
+        (
+            &["homotopy", "ellipses", "--step", "99"][..],
+            "K = 99 is outside 2..=40",
+        ),
+        (
+            &["homotopy", "ellipses", "--step", "1"][..],
+            "K = 1 is outside 2..=40",
+        ),
         (
             &["homotopy", "rmse", "--realisations", "0"][..],
             "realisation",

@@ -61,11 +61,10 @@ impl EllipsesConfig {
         self.ohf.validate()?;
         self.grid.validate()?;
         if self.step < 2 || self.step > self.scenario.n_samples {
-            return Err(HomotopyError::Param(ParamError {
-                name: "step K",
-                value: self.step as f64,
-                reason: "must lie in 2..=n_samples (instant 1 only initialises)",
-            }));
+            return Err(HomotopyError::InstantOutOfRange {
+                k: self.step,
+                n_samples: self.scenario.n_samples,
+            });
         }
         if self.lambda.is_empty() {
             return Err(HomotopyError::Param(ParamError {

@@ -3,16 +3,16 @@
 //! resampling at every step, on pf-core's batch engine.
 //!
 //! The scenario is [`RadarConfig::default`] (its true trajectory, its `Q`, `R` and prior);
-//! the measurements are simulated from stream `(seed, 0)` or read from a CSV file with
-//! header `range,azimuth` ([`parse_observations_csv`]), so that other implementations can
-//! run on the same data.
+//! the measurements are simulated from stream `(seed, 0)` or given
+//! ([`RadarBench::with_observations`]; `pf-viz bench filter --data` reads them from a CSV
+//! file with `range` and `azimuth` columns), so that other implementations can run on the
+//! same data.
 
 use crate::error::{MpfError, Result};
 use crate::mpf::{MpfConfig, SharedMpf};
 use crate::radar::{Partition, RadarConfig, RadarObs, RangeAzimuth};
 use pf_core::filter::{BatchFilter, Bootstrap};
 use pf_core::mc::{Par, stream_rng};
-use pf_core::params::ParamError;
 
 /// One benchmark: the filter and its observations. [`run`](Self::run) runs the filter from
 /// the start over all of them.
@@ -86,81 +86,5 @@ impl RadarBench {
     pub fn run(&mut self) -> Result<f64> {
         self.filter.reset();
         Ok(self.filter.run(&self.ys)?.log_lik)
-    }
-}
-
-/// Measurements from a CSV text with the header `range,azimuth` (one row per step; a row
-/// whose two cells are empty is a missing measurement).
-///
-/// # Errors
-/// A wrong header, a row without two cells, one cell empty and not the other, or a cell
-/// that is not a finite number; the error names the line (counting from 1).
-pub fn parse_observations_csv(text: &str) -> Result<Vec<Option<RadarObs>>> {
-    let bad = |line: usize, reason: &'static str| {
-        MpfError::Param(ParamError {
-            name: "observations CSV line",
-            value: line as f64,
-            reason,
-        })
-    };
-    let mut lines = text.lines().enumerate();
-    match lines.next() {
-        Some((_, h)) if h.trim().replace(' ', "") == "range,azimuth" => {}
-        _ => return Err(bad(1, "the header must be `range,azimuth`")),
-    }
-    let mut ys = Vec::new();
-    for (i, line) in lines {
-        let n = i + 1;
-        let line = line.trim_end_matches('\r');
-        if line.trim().is_empty() {
-            continue;
-        }
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        let [r, a] = cells[..] else {
-            return Err(bad(n, "expected two cells, range and azimuth"));
-        };
-        let y = match (r.is_empty(), a.is_empty()) {
-            (true, true) => None,
-            (false, false) => {
-                let num = |s: &str| {
-                    s.parse::<f64>()
-                        .ok()
-                        .filter(|v| v.is_finite())
-                        .ok_or(bad(n, "a cell is not a finite number"))
-                };
-                Some(RadarObs::new(num(r)?, num(a)?))
-            }
-            _ => return Err(bad(n, "range and azimuth must both be given or both empty")),
-        };
-        ys.push(y);
-    }
-    Ok(ys)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn csv_reads_values_and_gaps_and_names_the_bad_line() {
-        let ys = parse_observations_csv("range,azimuth\n2500.5,0.64\n,\n2490,-0.1\n").unwrap();
-        assert_eq!(ys.len(), 3);
-        assert_eq!(ys[0], Some(RadarObs::new(2500.5, 0.64)));
-        assert_eq!(ys[1], None);
-        assert_eq!(ys[2], Some(RadarObs::new(2490.0, -0.1)));
-        let line = |e: MpfError| match e {
-            MpfError::Param(p) => p.value,
-            e => panic!("{e}"),
-        };
-        let e = parse_observations_csv("range,azimuth\n1,2\n3,x\n").unwrap_err();
-        assert_eq!(line(e), 3.0);
-        let e = parse_observations_csv("range,azimuth\n1,\n").unwrap_err();
-        assert_eq!(line(e), 2.0);
-        let e = parse_observations_csv("range,azimuth\n1,2,3\n").unwrap_err();
-        assert_eq!(line(e), 2.0);
-        let e = parse_observations_csv("r,a\n1,2\n").unwrap_err();
-        assert_eq!(line(e), 1.0);
-        let e = parse_observations_csv("range,azimuth\nNaN,2\n").unwrap_err();
-        assert_eq!(line(e), 2.0);
     }
 }

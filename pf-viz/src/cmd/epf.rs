@@ -23,6 +23,7 @@ use pf_epf::tracker::{
 use serde::Serialize;
 
 use crate::cmd::{print_json, print_line};
+use crate::data::Table;
 use crate::error::{Result, VizError};
 use crate::io::{check_writable, prepare_out_dir, write_atomic};
 
@@ -154,121 +155,45 @@ pub fn run(cmd: EpfCommand) -> Result<()> {
     }
 }
 
-/// A CSV's required columns, row by row, with each row's 1-based line (header = 1).
-struct CsvTable {
-    rows: Vec<Vec<String>>,
-    lines: Vec<u64>,
-}
-
-fn data_err(path: &Path, line: Option<u64>, message: impl Into<String>) -> VizError {
-    VizError::Data {
-        path: path.to_path_buf(),
-        line,
-        message: message.into(),
-    }
-}
-
-fn read_columns(path: &Path, columns: &[&str]) -> Result<CsvTable> {
-    let mut reader = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| data_err(path, None, e.to_string()))?;
-    let headers = reader
-        .headers()
-        .map_err(|e| data_err(path, Some(1), e.to_string()))?
-        .clone();
-    let idx = columns
-        .iter()
-        .map(|c| crate::data::column(path, &headers, c))
-        .collect::<Result<Vec<_>>>()?;
-    let mut table = CsvTable {
-        rows: Vec::new(),
-        lines: Vec::new(),
-    };
-    for record in reader.records() {
-        let record =
-            record.map_err(|e| data_err(path, e.position().map(|p| p.line()), e.to_string()))?;
-        let line = record.position().map_or(0, |p| p.line());
-        table.rows.push(
-            idx.iter()
-                .map(|&i| record.get(i).unwrap_or("").to_owned())
-                .collect(),
-        );
-        table.lines.push(line);
-    }
-    Ok(table)
-}
-
-fn parse_f64(path: &Path, line: u64, col: &str, s: &str) -> Result<f64> {
-    let v: f64 = s
-        .parse()
-        .map_err(|_| data_err(path, Some(line), format!("`{col}` = `{s}` is not a number")))?;
-    if !v.is_finite() {
-        return Err(data_err(
-            path,
-            Some(line),
-            format!("`{col}` = `{s}` is not finite"),
-        ));
-    }
-    Ok(v)
-}
-
-fn parse_int(path: &Path, line: u64, col: &str, s: &str) -> Result<i64> {
-    if let Ok(v) = s.parse::<i64>() {
-        return Ok(v);
-    }
-    let v = parse_f64(path, line, col, s)?;
-    if v.fract() != 0.0 || v.abs() > 9.0e15 {
-        return Err(data_err(
-            path,
-            Some(line),
-            format!("`{col}` = `{s}` is not an integer"),
-        ));
-    }
-    Ok(v as i64)
-}
-
 /// An error of the library's validation, mapped to the file and line at fault.
-fn epf_data_err(path: &Path, lines: &[u64], e: EpfError) -> VizError {
+fn epf_data_err(table: &Table, e: EpfError) -> VizError {
     let line = match &e {
         EpfError::FrameBackwards { row, .. }
         | EpfError::FrameOutOfRange { row, .. }
-        | EpfError::NonFiniteData { row, .. } => lines.get(*row).copied(),
+        | EpfError::NonFiniteData { row, .. } => table.line(*row),
         _ => None,
     };
-    data_err(path, line, e.to_string())
+    table.error(line, e.to_string())
 }
 
 fn read_detections(path: &Path) -> Result<Detections> {
-    let t = read_columns(path, &["frame", "x", "y"])?;
-    let mut rows = Vec::with_capacity(t.rows.len());
-    for (r, &line) in t.rows.iter().zip(&t.lines) {
-        rows.push(Detection {
-            frame: parse_int(path, line, "frame", &r[0])?,
-            position: Vec2::new(
-                parse_f64(path, line, "x", &r[1])?,
-                parse_f64(path, line, "y", &r[2])?,
-            ),
-            target: None,
-        });
-    }
-    Detections::new(rows).map_err(|e| epf_data_err(path, &t.lines, e))
+    let t = Table::read(path, &["frame", "x", "y"])?;
+    let rows = t
+        .rows()
+        .map(|(line, r)| {
+            Ok(Detection {
+                frame: t.integer(line, "frame", &r[0])?,
+                position: Vec2::new(t.number(line, "x", &r[1])?, t.number(line, "y", &r[2])?),
+                target: None,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Detections::new(rows).map_err(|e| epf_data_err(&t, e))
 }
 
 fn read_init(path: &Path) -> Result<Init> {
-    let t = read_columns(path, &["target", "frame", "x", "y"])?;
-    let mut rows = Vec::with_capacity(t.rows.len());
-    for (r, &line) in t.rows.iter().zip(&t.lines) {
-        rows.push(InitRow {
-            target: parse_int(path, line, "target", &r[0])?,
-            frame: parse_int(path, line, "frame", &r[1])?,
-            position: Vec2::new(
-                parse_f64(path, line, "x", &r[2])?,
-                parse_f64(path, line, "y", &r[3])?,
-            ),
-        });
-    }
-    Init::new(&rows).map_err(|e| epf_data_err(path, &t.lines, e))
+    let t = Table::read(path, &["target", "frame", "x", "y"])?;
+    let rows = t
+        .rows()
+        .map(|(line, r)| {
+            Ok(InitRow {
+                target: t.integer(line, "target", &r[0])?,
+                frame: t.integer(line, "frame", &r[1])?,
+                position: Vec2::new(t.number(line, "x", &r[2])?, t.number(line, "y", &r[3])?),
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Init::new(&rows).map_err(|e| epf_data_err(&t, e))
 }
 
 impl TrackerArgs {
@@ -295,12 +220,22 @@ fn noise_note(n: &NoiseChoice) {
         return;
     }
     eprintln!(
-        "q = {:.4} ({}), r = {:.4} ({})",
-        n.q,
+        "q = {} ({}), r = {} ({})",
+        four_places(n.q),
         n.q_source.name(),
-        n.r,
+        four_places(n.r),
         n.r_source.name()
     );
+}
+
+/// Four decimals, or four in scientific notation where that would show none or too many
+/// digits (a given `--r 1e-6` is not `0.0000`).
+fn four_places(x: f64) -> String {
+    if x != 0.0 && !(1e-3..1e5).contains(&x.abs()) {
+        format!("{x:.4e}")
+    } else {
+        format!("{x:.4}")
+    }
 }
 
 fn write_csv(path: &Path, header: &str, lines: impl Iterator<Item = String>) -> Result<()> {
@@ -588,4 +523,17 @@ fn run_energies(a: &EnergiesArgs) -> Result<()> {
     }
     noise_note(&noise);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::four_places;
+
+    #[test]
+    fn noise_values_keep_their_digits_at_any_scale() {
+        assert_eq!(four_places(0.25), "0.2500");
+        assert_eq!(four_places(0.0), "0.0000");
+        assert_eq!(four_places(1e-6), "1.0000e-6");
+        assert_eq!(four_places(2.5e7), "2.5000e7");
+    }
 }
