@@ -99,7 +99,8 @@ pub struct BenchFilterArgs {
     #[arg(long, value_enum)]
     pub model: BenchModel,
     /// Data to filter instead of a simulated scenario: for `ar1` a CSV with a `y` column
-    /// (Y_0…Y_n), for `radar` one with `range,azimuth` columns (one row per step).
+    /// (Y_0…Y_n), for `radar` one with `range` and `azimuth` columns (one row per step; a
+    /// row with both empty is a missing measurement). Other columns are ignored.
     #[arg(long, value_name = "FILE.csv")]
     pub data: Option<PathBuf>,
     /// Number of particles N.
