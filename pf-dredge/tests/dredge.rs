@@ -455,14 +455,19 @@ fn estimate_json_has_the_cli_contract_keys() {
     keys.sort_unstable();
     assert_eq!(keys, ["Q_o", "direct", "residuals", "rho_o", "t"]);
     assert!(v["direct"]["Q_o"].is_array() && v["direct"]["rho_o"].is_array());
-    for s in ["Q_o", "rho_o"] {
-        // ρ_o truth is empty before any overflow: then its summary is null.
-        if !v["residuals"][s].is_null() {
-            for k in ["mean", "std", "max_abs"] {
-                assert!(v["residuals"][s][k].is_number(), "{s}.{k}");
-            }
+    let summary = |v: &serde_json::Value, s: &str| {
+        for k in ["mean", "std", "max_abs"] {
+            assert!(v["residuals"][s][k].is_number(), "{s}.{k}");
         }
-    }
+    };
+    summary(&v, "Q_o");
+    // The first 100 s end before any overflow, so ρ_o has no truth and no summary.
+    assert!(v["residuals"]["rho_o"].is_null(), "{}", v["residuals"]);
+    // A whole cycle overflows: both have one.
+    let cycle = seeded(&SimConfig::default(), 1).unwrap().to_data();
+    let v = serde_json::to_value(estimate(&cycle, &cfg).unwrap()).unwrap();
+    summary(&v, "Q_o");
+    summary(&v, "rho_o");
     let mut no_truth = small_data();
     no_truth.truth = None;
     let v = serde_json::to_value(estimate(&no_truth, &cfg).unwrap()).unwrap();

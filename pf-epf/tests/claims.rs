@@ -176,11 +176,16 @@ fn the_wrong_frame_table_recomposes_eq_1() {
         .iter()
         .find(|r| r.assigned && r.source >= 0 && r.source != r.target)
         .expect("a target given another target's detection");
-    for r in w
+    let rivals: Vec<_> = w
         .rows
         .iter()
-        .filter(|r| r.source == wrong.source && r.gated)
-    {
+        .filter(|r| r.source == wrong.source && r.gated && r.target != wrong.target)
+        .collect();
+    assert!(
+        !rivals.is_empty(),
+        "another target gates the detection: {wrong:?}"
+    );
+    for r in rivals {
         assert!(
             wrong.terms.e <= r.terms.e,
             "eq. (1): {wrong:?} against {r:?}"

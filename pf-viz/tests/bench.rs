@@ -429,6 +429,22 @@ fn bench_kernel_copies_give_the_same_estimate() {
             avx2["kernels"], "avx512",
             "{model}: --simd avx2 caps the copy"
         );
+        // On a CPU that has them the three copies really are three (else two of the
+        // comparisons below would compare the portable copy with itself).
+        #[cfg(target_arch = "x86_64")]
+        if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+            assert_eq!(avx2["kernels"], "avx2", "{model}");
+            let widest = if is_x86_feature_detected!("avx512f")
+                && is_x86_feature_detected!("avx512dq")
+                && is_x86_feature_detected!("avx512bw")
+                && is_x86_feature_detected!("avx512vl")
+            {
+                "avx512"
+            } else {
+                "avx2"
+            };
+            assert_eq!(auto["kernels"], widest, "{model}");
+        }
         let bits = |v: &serde_json::Value| v["loglik"].as_f64().unwrap().to_bits();
         assert_eq!(
             bits(&auto),

@@ -682,9 +682,13 @@ mod tests {
         );
         assert_eq!(r.paths.truth.as_ref().map(Vec::len), Some(31));
         assert_eq!((r.weights.len(), r.ess.len()), (31, 31));
-        if let Some(t) = r.paths.coalescence_time {
-            assert_eq!(r.paths.surviving[t].iter().filter(|&&s| s).count(), 1);
-        }
+        let t = r
+            .paths
+            .coalescence_time
+            .expect("20 particles' paths coalesce within 30 steps");
+        assert_eq!(r.paths.surviving[t].iter().filter(|&&s| s).count(), 1);
+        // The most recent such step: the one after it has more than one survivor.
+        assert!(r.paths.surviving[t + 1].iter().filter(|&&s| s).count() > 1);
         assert_eq!(fig1(&cfg).unwrap(), r, "deterministic for its seed");
         let bad = Fig1Config {
             particles: 0,
