@@ -53,3 +53,8 @@ pub use estimator::{
     estimate,
 };
 pub use simulator::{Cycle, SimConfig, simulate};
+
+/// The README's example, compiled and run as a doctest.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -63,3 +63,8 @@ pub mod prior;
 pub mod quadrature;
 
 pub use error::{HomotopyError, Result};
+
+/// The README's example, compiled and run as a doctest.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

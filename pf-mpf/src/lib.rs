@@ -62,3 +62,8 @@ pub mod mpf;
 pub mod radar;
 
 pub use error::{MpfError, Result};
+
+/// The README's example, compiled and run as a doctest.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
