@@ -26,6 +26,7 @@ use crate::radar::{RadarObs, RangeAzimuth};
 use pf_core::filter::batch::{BatchModel, Cols, ColsMut};
 use pf_core::params::{self, ParamError};
 use pf_core::resample::{Resample, Resampler};
+use pf_core::simd::widest;
 use rand::RngExt;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -756,6 +757,7 @@ fn interleaved(reps: usize, rounds: usize, jobs: &mut [Box<dyn FnMut() + '_>]) -
 /// `out_r = Σ_c a[r][c] · x_c` for the `d` columns `x` of `N` particles: a `d×d · d×N`
 /// product written as the batch filters write theirs, column by column over the particles,
 /// `d·N·(2d − 1)` flops (Table I's count).
+#[inline(always)]
 fn product_columns(a: &[f64], x: &[Vec<f64>], out: &mut [Vec<f64>]) {
     let d = x.len();
     for (r, o) in out.iter_mut().enumerate() {
@@ -776,6 +778,7 @@ fn product_columns(a: &[f64], x: &[Vec<f64>], out: &mut [Vec<f64>]) {
 /// tile ([`TILE`] particles), the residuals from the radar measurement's own
 /// [`Measurement::residuals`] (range, azimuth, the azimuth wrapped), then `−½ eᵀR⁻¹e`
 /// with the radar's diagonal `R`.
+#[inline(always)]
 fn radar_log_lik(y: &RadarObs, r_inv: [f64; 2], px: &[f64], py: &[f64], lw: &mut [f64]) {
     let mut e = [[0.0; TILE]; 2];
     for ((lw, px), py) in lw
@@ -874,7 +877,10 @@ pub fn measure(cfg: &CalibrateConfig) -> Result<Timings> {
     for (a, x, out) in &mut mats {
         let (a, x) = (&*a, &*x);
         jobs.push(Box::new(move || {
-            product_columns(a, x, out);
+            widest(
+                #[inline(always)]
+                || product_columns(a, x, out),
+            );
             black_box(&*out);
         }));
     }
@@ -898,20 +904,30 @@ pub fn measure(cfg: &CalibrateConfig) -> Result<Timings> {
         } = p;
         let (px, py) = (&*px, &*py);
         lik_jobs.push(Box::new(move || {
-            radar_log_lik(&y, r_inv, px, py, lw);
-            let _ = pf_core::weights::normalise(0, lw, w);
+            widest(
+                #[inline(always)]
+                || {
+                    radar_log_lik(&y, r_inv, px, py, lw);
+                    let _ = pf_core::weights::normalise_into(0, lw, w);
+                },
+            );
             black_box(&*w);
         }));
         let mut rng_res = streams.next().expect("endless");
         let wr = &*wr;
         let states = &*states;
         res_jobs.push(Box::new(move || {
-            Resampler::Systematic.resample(wr, &mut rng_res, anc);
-            for (dst, src) in moved.iter_mut().zip(states) {
-                for (d, &a) in dst.iter_mut().zip(anc.iter()) {
-                    *d = src[a];
-                }
-            }
+            widest(
+                #[inline(always)]
+                || {
+                    Resampler::Systematic.resample(wr, &mut rng_res, anc);
+                    for (dst, src) in moved.iter_mut().zip(states) {
+                        for (d, &a) in dst.iter_mut().zip(anc.iter()) {
+                            *d = src[a];
+                        }
+                    }
+                },
+            );
             black_box(&*moved);
         }));
         let mut lanes = pf_core::simd::LaneRng::from_rng(&mut streams.next().expect("endless"));
@@ -1016,12 +1032,17 @@ where
         time(
             1,
             &mut || {
-                model.propagate(
-                    t,
-                    &(),
-                    Cols::new(&parents, dim, n),
-                    Cols::new(&z, q, n),
-                    ColsMut::new(&mut x, dim, n),
+                widest(
+                    #[inline(always)]
+                    || {
+                        model.propagate(
+                            t,
+                            &(),
+                            Cols::new(&parents, dim, n),
+                            Cols::new(&z, q, n),
+                            ColsMut::new(&mut x, dim, n),
+                        )
+                    },
                 );
                 black_box(&x);
             },
@@ -1030,9 +1051,14 @@ where
         time(
             2,
             &mut || {
-                lw.fill(0.0);
-                model.add_log_likelihood(t, y, Cols::new(&x, dim, n), &mut lw);
-                let _ = pf_core::weights::normalise(t, &mut lw, &mut w);
+                widest(
+                    #[inline(always)]
+                    || {
+                        lw.fill(0.0);
+                        model.add_log_likelihood(t, y, Cols::new(&x, dim, n), &mut lw);
+                        let _ = pf_core::weights::normalise_into(t, &lw, &mut w);
+                    },
+                );
                 black_box(&w);
             },
             r == 0,
@@ -1040,12 +1066,17 @@ where
         time(
             3,
             &mut || {
-                Resampler::Systematic.resample(&w, &mut rng, &mut anc);
-                for (src, dst) in x.chunks_exact(n).zip(gathered.chunks_exact_mut(n)) {
-                    for (d, &a) in dst.iter_mut().zip(&anc) {
-                        *d = src[a];
-                    }
-                }
+                widest(
+                    #[inline(always)]
+                    || {
+                        Resampler::Systematic.resample(&w, &mut rng, &mut anc);
+                        for (src, dst) in x.chunks_exact(n).zip(gathered.chunks_exact_mut(n)) {
+                            for (d, &a) in dst.iter_mut().zip(&anc) {
+                                *d = src[a];
+                            }
+                        }
+                    },
+                );
                 black_box(&gathered);
             },
             r == 0,

@@ -157,6 +157,20 @@ pub fn vectorised<R>(f: impl FnOnce() -> R) -> R {
     dispatch(Simd::Auto, f)
 }
 
+/// Run `f` compiled as the batch filter's chunk step is: with the AVX-512 features where
+/// the CPU has them, else with AVX2 and FMA, else for baseline x86-64. For timing a model's
+/// loops outside the filter on the code the filter runs (pf-mpf's calibration of eq. (11)),
+/// since the same loop compiled for baseline x86-64 can take several times as long.
+///
+/// `f` should be an `#[inline(always)]` closure whose helpers are `#[inline(always)]` too.
+#[inline]
+pub fn widest<R>(f: impl FnOnce() -> R) -> R {
+    match avx512::Avx512::get(Simd::Auto) {
+        Some(cpu) => cpu.run(f),
+        None => dispatch(Simd::Auto, f),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
