@@ -194,5 +194,12 @@ mod tests {
             widest == "avx512",
             avx512::Avx512::get(Simd::Auto).is_some()
         );
+        // Where the CPU has AVX2 and FMA the `avx2` copy really runs, so the tests that
+        // compare it with the portable copy compare two different compilations.
+        #[cfg(target_arch = "x86_64")]
+        if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+            assert_eq!(Simd::Avx2.kernels(), "avx2");
+            assert_ne!(widest, "portable");
+        }
     }
 }
