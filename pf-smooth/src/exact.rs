@@ -54,6 +54,60 @@ pub fn exact_statistics(data: &Ar1Data, theta: &Theta) -> Result<SuffStats> {
     Ok(SuffStats { n, tau })
 }
 
+/// The limit of the fixed-lag estimator `τ̂_n^{δ,N}` (eqs. (8)–(9)) as `N → ∞`: the term of
+/// step `j` (`s_{j−1}(X_{j−1}, X_j)`, and `(Y_0 − X_0)²` for `j = 0`) under the smoothing
+/// distribution given `Y_{0:t}` with `t = min(j + δ − 1, n)`, the step at which the
+/// estimator freezes it; `τ_n` ([`exact_statistics`]) takes every term given `Y_{0:n}`. The
+/// difference between the two is the fixed-lag approximation's own bias, which no number of
+/// particles removes. Exact (Kalman filter and RTS smoother on each prefix of the data),
+/// `O(n·min(δ, n))` smoother steps.
+///
+/// # Errors
+/// `δ = 0`, an invalid `θ` or a Kalman/RTS failure.
+pub fn exact_fixed_lag_statistics(
+    data: &Ar1Data,
+    theta: &Theta,
+    delta: usize,
+) -> Result<SuffStats> {
+    pf_core::params::at_least_one("lag", delta)?;
+    theta.validate()?;
+    let (y, n) = (data.y(), data.n());
+    let mut tau = [0.0; 4];
+    // Smoothed moments given Y_{0:t} for every t a term is frozen at: each j with
+    // j + δ − 1 < n has its own t, and every later term is read at t = n.
+    let mut add_terms = |t: usize, js: std::ops::RangeInclusive<usize>| -> Result<()> {
+        if t == 0 {
+            // Given Y_0 alone the diffuse prior is X_0 ~ N(Y_0, ρ²): E(Y_0 − X_0)² = ρ².
+            tau[3] += theta.rho2;
+            return Ok(());
+        }
+        let (model, kf) = filter(&data.prefix(t)?, theta)?;
+        let sm = rts_smoother(&model, &kf)?;
+        let m = |k: usize| sm.means[k][0];
+        let second = |k: usize| m(k) * m(k) + sm.covs[k][(0, 0)];
+        for j in js {
+            let e = y[j] - m(j);
+            tau[3] += e * e + sm.covs[j][(0, 0)];
+            if j >= 1 {
+                tau[0] += second(j - 1);
+                tau[1] += m(j - 1) * m(j) + sm.cross_covs[j - 1][(0, 0)];
+                tau[2] += second(j);
+            }
+        }
+        Ok(())
+    };
+    // Terms j = 0 … n − δ are frozen at t = j + δ − 1 < n, one prefix each.
+    for j in 0..=n.saturating_sub(delta) {
+        if j + delta - 1 < n {
+            add_terms(j + delta - 1, j..=j)?;
+        }
+    }
+    // The rest at t = n.
+    let first_at_n = (n + 1).saturating_sub(delta);
+    add_terms(n, first_at_n..=n)?;
+    Ok(SuffStats { n, tau })
+}
+
 /// `ℓ_n(θ)`, the exact log-likelihood under the diffuse prior.
 ///
 /// # Errors
