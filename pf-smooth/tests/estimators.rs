@@ -176,3 +176,45 @@ fn simulated_observations_are_the_stream_s_draw() {
     assert_eq!(data.y(), simulated(40, 3).as_slice());
     assert_eq!(em(&drawn).unwrap(), em(&given).unwrap());
 }
+
+/// The lag sweep's exact fixed-lag updates: the lag's bias shrinks towards the exact EM
+/// update as δ grows and vanishes once δ passes n (every term then smoothed given all the
+/// data); and the particle updates of a short lag centre on that limit, not on the exact
+/// update, within 4 standard errors of the replications.
+#[test]
+fn the_lag_sweep_separates_the_lags_bias_from_the_particles() {
+    use pf_smooth::experiments::{LagSweepConfig, lag_sweep};
+    let y = simulated(100, 5);
+    let out = lag_sweep(&LagSweepConfig {
+        data: Observations::Given(y),
+        phi: 0.8,
+        sigma: 0.5,
+        rho: 2.0,
+        particles: 500,
+        replications: 40,
+        lags: vec![1, 3, 10, 101],
+        seed: 4,
+    })
+    .unwrap();
+    let bias: Vec<f64> = out
+        .exact_fixed_lag
+        .iter()
+        .map(|t| (t.phi - out.exact.phi).abs())
+        .collect();
+    assert!(bias[0] > bias[1] && bias[1] > bias[2], "{bias:?}");
+    assert_eq!(
+        out.exact_fixed_lag[3], out.exact,
+        "δ > n is the joint smoother"
+    );
+    let (m, se) = mean_and_se(&out.fixed_lag[0].phi);
+    let limit = out.exact_fixed_lag[0].phi;
+    assert!(
+        (m - limit).abs() < 4.0 * se,
+        "δ = 1: {m} ± {se}, limit {limit}"
+    );
+    assert!(
+        (m - out.exact.phi).abs() > 4.0 * se,
+        "δ = 1 is biased: {m} ± {se}, exact {}",
+        out.exact.phi
+    );
+}

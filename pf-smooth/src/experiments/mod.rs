@@ -428,6 +428,11 @@ pub struct LagSweepResult {
     pub fixed_lag: Vec<ThetaSamples>,
     /// The joint update from the same runs (the limit δ → ∞).
     pub joint: ThetaSamples,
+    /// Per lag, the update from the fixed-lag estimator's `N → ∞` limit
+    /// ([`exact_fixed_lag_statistics`](crate::exact::exact_fixed_lag_statistics)): its
+    /// difference from `exact` is the lag's own bias (forgetting), apart from the particles'.
+    #[serde(default)]
+    pub exact_fixed_lag: Vec<Theta>,
 }
 
 /// Run the lag sweep.
@@ -449,6 +454,11 @@ pub fn lag_sweep(cfg: &LagSweepConfig) -> Result<LagSweepResult> {
             .collect::<Result<Vec<_>>>()?;
         Ok::<_, crate::SmoothError>((run.joint.m_step()?, f))
     })?;
+    let exact_fixed_lag = cfg
+        .lags
+        .iter()
+        .map(|&d| crate::exact::exact_fixed_lag_statistics(&data, &theta, d)?.m_step())
+        .collect::<Result<Vec<_>>>()?;
     let joint: Vec<Theta> = reps.iter().map(|r| r.0).collect();
     let fixed_lag = (0..cfg.lags.len())
         .map(|l| ThetaSamples::from_thetas(&reps.iter().map(|r| r.1[l]).collect::<Vec<_>>()))
@@ -459,6 +469,7 @@ pub fn lag_sweep(cfg: &LagSweepConfig) -> Result<LagSweepResult> {
         lags: cfg.lags.clone(),
         fixed_lag,
         joint: ThetaSamples::from_thetas(&joint),
+        exact_fixed_lag,
     })
 }
 

@@ -11,7 +11,7 @@
 //! | `smooth-fig2-n50.png`, `smooth-fig2-n500.png` | updates (10)–(12), joint estimator, N = 10, 100, 1000 (Fig. 2) |
 //! | `smooth-fig3-fixed-lag.png` | joint against fixed-lag δ = 20, N = 100, 1000, n = 500 (Fig. 3) |
 //! | `smooth-fig4-sem.png` | four SEM chains, N = 25, over exact EM (Fig. 4) |
-//! | `smooth-lag-sweep.png` | bias and standard deviation of the fixed-lag update against δ |
+//! | `smooth-lag-sweep.png` | bias and standard deviation of the fixed-lag update against δ, and the lag's own bias (its exact N → ∞ limit) |
 //! | `smooth.rrd` | the multinomial genealogy on `step`, the SEM chains on `iteration` |
 
 use pf_smooth::experiments::{
@@ -142,7 +142,9 @@ fn run_section(ctx: &Context<'_>) -> Result<SectionReport> {
                 "Not in the paper: bias (mean minus exact update) and standard deviation of the \
                  fixed-lag updates against δ at N = {}, n = {}, {} replications; the \
                  standard deviation grows with δ (path degeneracy), the bias shrinks \
-                 (forgetting).",
+                 (forgetting). Grey dots: the lag's own bias, the update from the fixed-lag \
+                 estimator's exact N → ∞ limit (each term smoothed given the data up to the \
+                 step it is frozen at).",
                 {
                     let n: Vec<String> = c.sweep_particles.iter().map(|n| n.to_string()).collect();
                     match n.split_last() {
@@ -474,6 +476,22 @@ fn sweep_figure(ctx: &Context<'_>, config: &SmoothConfig, sweeps: &[LagSweepResu
                     name: format!("std. dev., N = {np}"),
                     style: XyStyle::Series(2 * j + 1),
                     kind: LayerKind::Path(spread),
+                });
+            }
+            // The lag's own bias, the same for every N (the estimator's N → ∞ limit).
+            if let Some(s) = sweeps.first() {
+                let exact = pick(&s.exact);
+                let limit: Vec<[f64; 2]> = s
+                    .lags
+                    .iter()
+                    .zip(&s.exact_fixed_lag)
+                    .map(|(&d, t)| [d as f64, pick(t) - exact])
+                    .collect();
+                all.extend(limit.iter().map(|q| q[1]));
+                layers.push(Layer {
+                    name: "bias as N → ∞ (exact)".into(),
+                    style: XyStyle::Context,
+                    kind: LayerKind::Points(limit),
                 });
             }
             let (lo, hi) = all
