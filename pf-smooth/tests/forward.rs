@@ -105,8 +105,10 @@ fn forward_smoothing_is_ffbsm_in_one_pass() {
     }
 }
 
-/// Mean over 24 filters of N = 300 within 4 standard errors of the exact statistics, plus
-/// an O(1/N) bias we allow up to 1 % of the value (as for the paper's two estimators).
+/// Mean over 24 filters of N = 300 within 4 standard errors of the exact statistics. The
+/// O(1/N) bias is inside that bound: over 400 filters of N = 300 it is −0.5 % of the value
+/// (2.2–2.5 standard errors there; at N = 1200 under 0.1 %), while the standard error of 24
+/// filters is about 0.9 %, so the bias takes 0.6 of the 4 standard errors.
 #[test]
 fn forward_smoothing_converges_to_the_exact_statistics() {
     let d = data(50, 2);
@@ -123,7 +125,7 @@ fn forward_smoothing_converges_to_the_exact_statistics() {
         let v: Vec<f64> = runs.iter().map(|t| t[c]).collect();
         let (m, se) = mean_and_se(&v);
         assert!(
-            (m - e).abs() < 4.0 * se + 0.01 * e.abs(),
+            (m - e).abs() < 4.0 * se,
             "statistic {c}: mean {m} ± {se}, exact {e}"
         );
     }
