@@ -122,15 +122,17 @@ fn marginalising_every_state_reproduces_the_kalman_filter() {
 }
 
 #[test]
-fn marginalisation_does_not_raise_the_rmse_at_equal_n() {
-    // R paired replications (same measurement noise for both filters): d_r is the PF's
-    // mean squared position+velocity error minus the full MPF's. Rao-Blackwellisation says
-    // E[d] ≥ 0; the test fails if the mean difference is below −2σ̂/√R (a one-sided 2.3 %
-    // false-alarm level if E[d] = 0 exactly).
+fn marginalisation_lowers_the_rmse_at_equal_n() {
+    // The paper's claim (Section V, Table II: "the RMSE is decreasing when marginalization
+    // is used"). R paired replications (same measurement noise for both filters): d_r is the
+    // PF's mean squared position+velocity error minus the full MPF's. Over 200 pairs the mean
+    // difference is 54 ± 16 (z ≈ 3.3), so over 800 its z is about 6.6: requiring 3 standard
+    // errors asserts a strict improvement at a 0.13 % one-sided false-alarm level, with
+    // little chance of failing a true one.
     let cfg = radar(25);
     let truth = cfg.truth();
     let n = 150;
-    let r = 24;
+    let r = 800;
     let pf: Partition = "PPPPPP".parse().unwrap();
     let mpf: Partition = "PPKKKK".parse().unwrap();
     let d = replicate(11, r, Par::Rayon, |_, rng| {
@@ -149,7 +151,7 @@ fn marginalisation_does_not_raise_the_rmse_at_equal_n() {
         mse(&a) - mse(&b)
     });
     let (mean, se) = mean_and_se(&d);
-    assert!(mean > -2.0 * se, "mean difference {mean} (se {se})");
+    assert!(mean > 3.0 * se, "mean difference {mean} (se {se})");
 }
 
 #[test]
