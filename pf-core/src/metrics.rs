@@ -236,6 +236,17 @@ impl Histogram {
     }
 }
 
+/// The `p`-quantile of values sorted in ascending order, by linear interpolation between
+/// order statistics (type 7, R's default `quantile`); NaN for no values.
+pub fn quantile_sorted(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let h = p.clamp(0.0, 1.0) * (sorted.len() - 1) as f64;
+    let (lo, hi) = (h.floor() as usize, h.ceil() as usize);
+    sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
+}
+
 /// Tukey's box-plot numbers of a sample: quartiles by linear interpolation (type 7, R's
 /// default `quantile`), whiskers to the furthest values within 1.5·IQR of the box, and the
 /// values beyond them.
@@ -279,12 +290,7 @@ impl BoxStats {
         }
         let mut s = x.to_vec();
         s.sort_by(f64::total_cmp);
-        let q = |p: f64| {
-            let h = p * (s.len() - 1) as f64;
-            let lo = h.floor() as usize;
-            let hi = h.ceil() as usize;
-            s[lo] + (h - lo as f64) * (s[hi] - s[lo])
-        };
+        let q = |p: f64| quantile_sorted(&s, p);
         let (q1, median, q3) = (q(0.25), q(0.5), q(0.75));
         let iqr = q3 - q1;
         let (lo_fence, hi_fence) = (q1 - 1.5 * iqr, q3 + 1.5 * iqr);
@@ -313,6 +319,22 @@ impl BoxStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// 10, 20, 30, 40: the quartile positions 0.75 and 2.25 interpolate to 17.5 and 32.5;
+    /// the ends are the extremes; one value is every quantile; none is NaN.
+    #[test]
+    fn quantiles_interpolate_between_order_statistics() {
+        let s = [10.0, 20.0, 30.0, 40.0];
+        assert_eq!(quantile_sorted(&s, 0.25), 17.5);
+        assert_eq!(quantile_sorted(&s, 0.5), 25.0);
+        assert_eq!(quantile_sorted(&s, 0.75), 32.5);
+        assert_eq!(
+            (quantile_sorted(&s, 0.0), quantile_sorted(&s, 1.0)),
+            (10.0, 40.0)
+        );
+        assert_eq!(quantile_sorted(&[7.0], 0.3), 7.0);
+        assert!(quantile_sorted(&[], 0.5).is_nan());
+    }
 
     #[test]
     fn tukey_numbers_of_a_known_sample() {

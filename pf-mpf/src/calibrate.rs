@@ -24,6 +24,7 @@ use crate::error::{MpfError, Result};
 use crate::model::{Measurement, TILE};
 use crate::radar::{RadarObs, RangeAzimuth};
 use pf_core::filter::batch::{BatchModel, Cols, ColsMut};
+use pf_core::metrics::quantile_sorted;
 use pf_core::params::{self, ParamError};
 use pf_core::resample::{Resample, Resampler};
 use pf_core::simd::widest;
@@ -550,25 +551,15 @@ impl CalibrationReport {
             return (x, x);
         }
         v.sort_by(f64::total_cmp);
-        (quantile(&v, 0.16), quantile(&v, 0.84))
+        (quantile_sorted(&v, 0.16), quantile_sorted(&v, 0.84))
     }
-}
-
-/// Linear-interpolated quantile of sorted data.
-fn quantile(sorted: &[f64], q: f64) -> f64 {
-    let pos = q * (sorted.len() - 1) as f64;
-    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
-    sorted[lo] + (pos - lo as f64) * (sorted[hi] - sorted[lo])
 }
 
 /// Median of the finite values, NaN if none.
 pub fn median(v: &[f64]) -> f64 {
     let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if s.is_empty() {
-        return f64::NAN;
-    }
     s.sort_by(f64::total_cmp);
-    quantile(&s, 0.5)
+    quantile_sorted(&s, 0.5)
 }
 
 /// A slope that is positive and finite, or why not: the non-negative fit first, then the
