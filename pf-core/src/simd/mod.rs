@@ -165,9 +165,20 @@ pub fn vectorised<R>(f: impl FnOnce() -> R) -> R {
 /// `f` should be an `#[inline(always)]` closure whose helpers are `#[inline(always)]` too.
 #[inline]
 pub fn widest<R>(f: impl FnOnce() -> R) -> R {
-    match avx512::Avx512::get(Simd::Auto) {
+    dispatch_widest(avx512::Avx512::get(Simd::Auto), Simd::Auto, f)
+}
+
+/// Run `f` compiled with the AVX-512 features where the caller holds the token, else as
+/// [`dispatch`] compiles it under `simd`: the batch filter's chunk step and [`widest`].
+#[inline(always)]
+pub(crate) fn dispatch_widest<R>(
+    avx512: Option<avx512::Avx512>,
+    simd: Simd,
+    f: impl FnOnce() -> R,
+) -> R {
+    match avx512 {
         Some(cpu) => cpu.run(f),
-        None => dispatch(Simd::Auto, f),
+        None => dispatch(simd, f),
     }
 }
 

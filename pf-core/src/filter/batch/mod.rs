@@ -54,7 +54,7 @@ use crate::resample::{
 };
 use crate::simd::avx2::Avx2;
 use crate::simd::avx512::Avx512;
-use crate::simd::{LaneRng, Simd, dispatch};
+use crate::simd::{LaneRng, Simd, dispatch_widest};
 use chunk::{ChunkStat, Scratch, Source, StepCtx, WalkHint, chunk_step};
 use rand::RngExt;
 use rayon::prelude::*;
@@ -477,17 +477,12 @@ impl<M: BatchModel, Q: BatchMutation<M>> BatchFilter<M, Q> {
                 .zip(rngs.iter_mut().zip(stats.iter_mut()));
             for (k, (((x, cw), lw), (rng, stat))) in chunks.enumerate() {
                 let d = g * per_group + k;
-                *stat = match ctx.avx512 {
-                    Some(cpu) => cpu.run(
-                        #[inline(always)]
-                        || chunk_step(&ctx, d, x, cw, lw, rng, scratch),
-                    ),
-                    None => dispatch(
-                        simd,
-                        #[inline(always)]
-                        || chunk_step(&ctx, d, x, cw, lw, rng, scratch),
-                    ),
-                };
+                *stat = dispatch_widest(
+                    ctx.avx512,
+                    simd,
+                    #[inline(always)]
+                    || chunk_step(&ctx, d, x, cw, lw, rng, scratch),
+                );
             }
         };
         let gs = per_group * c;
