@@ -13,7 +13,8 @@
 use crate::ar1::{Ar1Data, SuffStats, Theta};
 use crate::error::{Result, SmoothError};
 use nalgebra::DVector;
-use pf_core::kalman::{KalmanOutput, LinearGaussian, kalman_filter, rts_smoother};
+use pf_core::kalman::{KalmanOutput, LinearGaussian, SmootherOutput, kalman_filter, rts_smoother};
+use std::ops::RangeInclusive;
 
 fn filter(data: &Ar1Data, theta: &Theta) -> Result<(LinearGaussian, KalmanOutput)> {
     theta.validate()?;
@@ -35,23 +36,32 @@ fn filter(data: &Ar1Data, theta: &Theta) -> Result<(LinearGaussian, KalmanOutput
 pub fn exact_statistics(data: &Ar1Data, theta: &Theta) -> Result<SuffStats> {
     let (model, kf) = filter(data, theta)?;
     let sm = rts_smoother(&model, &kf)?;
-    let y = data.y();
-    let n = data.n();
-    let m = |k: usize| sm.means[k][0];
-    let second = |k: usize| m(k) * m(k) + sm.covs[k][(0, 0)];
     let mut tau = [0.0; 4];
-    for k in 0..n {
-        tau[0] += second(k);
-        tau[1] += m(k) * m(k + 1) + sm.cross_covs[k][(0, 0)];
+    add_terms(&mut tau, data.y(), &sm, 0, 0..=data.n());
+    Ok(SuffStats { n: data.n(), tau })
+}
+
+/// Add to `tau` the terms of steps `js` (`s_{j−1}(X_{j−1}, X_j)`: `X_{j−1}²`, `X_{j−1}X_j`,
+/// `X_j²`, `(Y_j − X_j)²`, and `(Y_0 − X_0)²` alone for `j = 0`) under the smoothed moments
+/// `sm`, whose entry 0 is step `lo`.
+fn add_terms(
+    tau: &mut [f64; 4],
+    y: &[f64],
+    sm: &SmootherOutput,
+    lo: usize,
+    js: RangeInclusive<usize>,
+) {
+    let m = |k: usize| sm.means[k - lo][0];
+    let var = |k: usize| sm.covs[k - lo][(0, 0)];
+    for j in js {
+        if j >= 1 {
+            tau[0] += m(j - 1) * m(j - 1) + var(j - 1);
+            tau[1] += m(j - 1) * m(j) + sm.cross_covs[j - 1 - lo][(0, 0)];
+            tau[2] += m(j) * m(j) + var(j);
+        }
+        let e = y[j] - m(j);
+        tau[3] += e * e + var(j);
     }
-    for k in 1..=n {
-        tau[2] += second(k);
-    }
-    for (k, yk) in y.iter().enumerate() {
-        let e = yk - m(k);
-        tau[3] += e * e + sm.covs[k][(0, 0)];
-    }
-    Ok(SuffStats { n, tau })
 }
 
 /// The limit of the fixed-lag estimator `τ̂_n^{δ,N}` (eqs. (8)–(9)) as `N → ∞`: the term of
@@ -59,8 +69,8 @@ pub fn exact_statistics(data: &Ar1Data, theta: &Theta) -> Result<SuffStats> {
 /// distribution given `Y_{0:t}` with `t = min(j + δ − 1, n)`, the step at which the
 /// estimator freezes it; `τ_n` ([`exact_statistics`]) takes every term given `Y_{0:n}`. The
 /// difference between the two is the fixed-lag approximation's own bias, which no number of
-/// particles removes. Exact (Kalman filter and RTS smoother on each prefix of the data),
-/// `O(n·min(δ, n))` smoother steps.
+/// particles removes. Exact: one Kalman filter pass, then for each freezing step `t` the RTS
+/// smoother over the window of steps its terms need, `O(n·min(δ, n))` smoother steps.
 ///
 /// # Errors
 /// `δ = 0`, an invalid `θ` or a Kalman/RTS failure.
@@ -70,41 +80,21 @@ pub fn exact_fixed_lag_statistics(
     delta: usize,
 ) -> Result<SuffStats> {
     pf_core::params::at_least_one("lag", delta)?;
-    theta.validate()?;
+    let (model, kf) = filter(data, theta)?;
     let (y, n) = (data.y(), data.n());
     let mut tau = [0.0; 4];
-    // Smoothed moments given Y_{0:t} for every t a term is frozen at: each j with
-    // j + δ − 1 < n has its own t, and every later term is read at t = n.
-    let mut add_terms = |t: usize, js: std::ops::RangeInclusive<usize>| -> Result<()> {
-        if t == 0 {
-            // Given Y_0 alone the diffuse prior is X_0 ~ N(Y_0, ρ²): E(Y_0 − X_0)² = ρ².
-            tau[3] += theta.rho2;
-            return Ok(());
-        }
-        let (model, kf) = filter(&data.prefix(t)?, theta)?;
-        let sm = rts_smoother(&model, &kf)?;
-        let m = |k: usize| sm.means[k][0];
-        let second = |k: usize| m(k) * m(k) + sm.covs[k][(0, 0)];
-        for j in js {
-            let e = y[j] - m(j);
-            tau[3] += e * e + sm.covs[j][(0, 0)];
-            if j >= 1 {
-                tau[0] += second(j - 1);
-                tau[1] += m(j - 1) * m(j) + sm.cross_covs[j - 1][(0, 0)];
-                tau[2] += second(j);
-            }
-        }
+    let mut freeze = |t: usize, js: RangeInclusive<usize>| -> Result<()> {
+        let lo = js.start().saturating_sub(1);
+        let sm = rts_smoother(&model, &kf.steps(lo, t)?)?;
+        add_terms(&mut tau, y, &sm, lo, js);
         Ok(())
     };
-    // Terms j = 0 … n − δ are frozen at t = j + δ − 1 < n, one prefix each.
-    for j in 0..=n.saturating_sub(delta) {
-        if j + delta - 1 < n {
-            add_terms(j + delta - 1, j..=j)?;
-        }
-    }
-    // The rest at t = n.
+    // Terms j ≤ n − δ are frozen at t = j + δ − 1 < n, one each; the rest at t = n.
     let first_at_n = (n + 1).saturating_sub(delta);
-    add_terms(n, first_at_n..=n)?;
+    for j in 0..first_at_n {
+        freeze(j + delta - 1, j..=j)?;
+    }
+    freeze(n, first_at_n..=n)?;
     Ok(SuffStats { n, tau })
 }
 

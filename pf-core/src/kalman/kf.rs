@@ -199,6 +199,33 @@ impl KalmanOutput {
     pub fn is_empty(&self) -> bool {
         self.filtered_means.is_empty()
     }
+
+    /// The filter's output for the steps `lo..=t` alone (`log_likelihood` is their
+    /// increments' sum). Each filtered moment already conditions on the data up to its step,
+    /// so [`rts_smoother`](super::rts_smoother) on it gives the moments of those steps given
+    /// `y_{0:t}`: a fixed-lag smoother's window, `O(t − lo)` instead of a pass from step 0.
+    ///
+    /// # Errors
+    /// [`CoreError::DimensionMismatch`]: `lo > t` or `t` beyond the last step.
+    pub fn steps(&self, lo: usize, t: usize) -> Result<KalmanOutput> {
+        if lo > t || t >= self.len() {
+            return Err(CoreError::DimensionMismatch {
+                what: "Kalman output steps lo..=t",
+                expected: self.len(),
+                got: t + 1,
+            });
+        }
+        let r = lo..t + 1;
+        let increments = self.log_lik_increments[r.clone()].to_vec();
+        Ok(KalmanOutput {
+            predicted_means: self.predicted_means[r.clone()].to_vec(),
+            predicted_covs: self.predicted_covs[r.clone()].to_vec(),
+            filtered_means: self.filtered_means[r.clone()].to_vec(),
+            filtered_covs: self.filtered_covs[r].to_vec(),
+            log_likelihood: increments.iter().sum(),
+            log_lik_increments: increments,
+        })
+    }
 }
 
 /// Run the Kalman filter over `ys` (`ys[t] = None` for a missing `y_t`), with inputs `us`

@@ -157,6 +157,26 @@ mod tests {
         }
     }
 
+    /// The RTS smoother on a window of steps `lo..=t` of one filter pass gives the same bits
+    /// as on the filter's output for `y_{0:t}` (the steps before `lo` never enter the
+    /// backward pass); a window past the end or reversed is an error.
+    #[test]
+    fn a_window_of_steps_smooths_as_the_prefix_does() {
+        let model = model_2d();
+        let n = 9;
+        let ys = observations(&model, n, &[4], 7);
+        let kf = kalman_filter(&model, &ys, None).unwrap();
+        let (lo, t) = (3, 6);
+        let prefix = kalman_filter(&model, &ys[..=t], None).unwrap();
+        let full = rts_smoother(&model, &prefix).unwrap();
+        let win = rts_smoother(&model, &kf.steps(lo, t).unwrap()).unwrap();
+        assert_eq!(win.means[..], full.means[lo..=t]);
+        assert_eq!(win.covs[..], full.covs[lo..=t]);
+        assert_eq!(win.cross_covs[..], full.cross_covs[lo..t]);
+        assert!(kf.steps(2, n + 1).is_err());
+        assert!(kf.steps(5, 4).is_err());
+    }
+
     #[test]
     fn inconsistent_output_is_an_error() {
         let model = model_2d();
