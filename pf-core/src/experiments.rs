@@ -60,10 +60,8 @@ impl Default for GenealogyConfig {
 /// Every number behind the genealogy and ESS figures.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct GenealogyResult {
-    /// The configuration that was run.
+    /// The configuration that was run (its seed included).
     pub config: GenealogyConfig,
-    /// The seed (`config.seed`).
-    pub seed: u64,
     /// The filter's log-likelihood estimate `log p̂(y_{0:n})`.
     pub log_lik: f64,
     /// Most recent step at which all surviving lineages share one ancestor.
@@ -103,7 +101,6 @@ pub fn genealogy(config: &GenealogyConfig) -> Result<GenealogyResult> {
     )?;
     Ok(GenealogyResult {
         config: *config,
-        seed,
         log_lik: run.log_lik,
         coalescence_time: run.paths.coalescence_time,
         surviving_per_step: run.lineage.surviving_counts(),

@@ -28,6 +28,8 @@ pub struct CoreResult {
     /// Every number behind the figures, at the top level of the JSON.
     #[serde(flatten)]
     pub run: GenealogyResult,
+    /// The report's master seed (`summary.json`'s `core.seed`; also in `config`).
+    pub seed: u64,
     /// Files written, relative to the output directory.
     pub files: Vec<String>,
 }
@@ -138,5 +140,9 @@ pub fn run(ctx: &Context<'_>, config: &GenealogyConfig) -> Result<CoreResult> {
         }
     }
 
-    Ok(CoreResult { run: r, files })
+    Ok(CoreResult {
+        seed: config.seed,
+        run: r,
+        files,
+    })
 }
