@@ -134,12 +134,11 @@ fn exact_fixed_lag_statistics_match_a_brute_force_joint_gaussian() {
     let d = data(6, 0);
     let theta = Theta::paper_start();
     let y = d.y();
+    let model = LinearGaussian::scalar(theta.phi, 1.0, theta.sigma2, theta.rho2, 0.0, 1e8).unwrap();
     for delta in [1, 2, 4] {
         let mut tau = [0.0; 4];
         for j in 0..=d.n() {
             let t = (j + delta - 1).min(d.n());
-            let model =
-                LinearGaussian::scalar(theta.phi, 1.0, theta.sigma2, theta.rho2, 0.0, 1e8).unwrap();
             let ys: Vec<Option<DVector<f64>>> = y[..=t]
                 .iter()
                 .map(|&v| Some(DVector::from_element(1, v)))
